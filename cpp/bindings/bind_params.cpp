@@ -1,0 +1,37 @@
+#include "amb_fast/controller.hpp"
+#include "amb_fast/plant.hpp"
+#include "bindings.hpp"
+
+using namespace amb_fast;
+
+void bind_params(py::module_& m) {
+    py::enum_<ForceLaw>(m, "ForceLaw", "Magnet force law: linearised or the differential magnet pair.")
+        .value("linear", ForceLaw::linear)
+        .value("nonlinear", ForceLaw::nonlinear);
+
+    py::class_<Rig>(m, "Rig", "Rig parameters in SI units (bandwidths in Hz, None = ideal stage).")
+        .def(py::init([](double mass, double kyy, double kiy, double bias_current, ForceLaw force_law,
+                         std::optional<double> amp_bandwidth, std::optional<double> eddy_bandwidth,
+                         std::optional<double> sensor_bandwidth, int substeps) {
+                 Rig rig{mass, kyy, kiy, bias_current, force_law, amp_bandwidth, eddy_bandwidth, sensor_bandwidth,
+                         substeps};
+                 rig.validate();
+                 return rig;
+             }),
+             py::kw_only(), py::arg("mass"), py::arg("kyy"), py::arg("kiy"), py::arg("bias_current"),
+             py::arg("force_law"), py::arg("amp_bandwidth"), py::arg("eddy_bandwidth"), py::arg("sensor_bandwidth"),
+             py::arg("substeps"))
+        .def("magnet_force", &Rig::magnet_force, py::arg("y"), py::arg("i"),
+             "Non-linear magnet-pair force on the platform (N) at displacement y (m) and current i (A).")
+        .def_property_readonly("gap", &Rig::gap, "Nominal air gap of the force law (m).");
+
+    py::class_<Pid>(m, "Pid", "Digital PID: gains in A/m, A/(m s), A s/m; cutoff and fs in Hz; delay in samples.")
+        .def(py::init([](double kp, double ki, double kd, std::optional<double> derivative_cutoff, double fs,
+                         int delay) {
+                 Pid pid{kp, ki, kd, derivative_cutoff, fs, delay};
+                 pid.validate();
+                 return pid;
+             }),
+             py::kw_only(), py::arg("kp"), py::arg("ki"), py::arg("kd"), py::arg("derivative_cutoff"),
+             py::arg("fs"), py::arg("delay"));
+}

@@ -1,0 +1,32 @@
+// One way to reject bad input: the parameter, the value, what was expected.
+#pragma once
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace amb_fast {
+
+template <class T>
+void require(bool ok, const char* name, T value, const char* expected) {
+    if (ok) return;
+    std::ostringstream msg;
+    msg.precision(17);
+    msg << name << " must be " << expected << ", got " << value;
+    throw std::invalid_argument(msg.str());
+}
+
+inline void require_positive(const char* name, double value, const char* unit) {
+    require(std::isfinite(value) && value > 0.0, name, value,
+            (std::string("a finite number > 0 (") + unit + ")").c_str());
+}
+
+// For member initialisers: validates, then passes the parameters on.
+template <class Params>
+const Params& validated(const Params& params) {
+    params.validate();
+    return params;
+}
+
+}  // namespace amb_fast

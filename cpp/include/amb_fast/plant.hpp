@@ -1,0 +1,66 @@
+// The continuous plant of MODEL.md sections 1-2: platform, magnet pair, optional first-order lags.
+#pragma once
+
+#include <Eigen/Dense>
+#include <optional>
+#include <string>
+
+namespace amb_fast {
+
+enum class ForceLaw { linear, nonlinear };
+
+// SI units; bandwidths in Hz, an empty one is an ideal (pass-through) stage.
+struct Rig {
+    double mass = 0.92;            // kg
+    double kyy = -53.3e3;          // N/m, position stiffness (negative: destabilising)
+    double kiy = 47.19;            // N/A, current stiffness
+    double bias_current = 0.65;    // A
+    ForceLaw force_law = ForceLaw::linear;
+    std::optional<double> amp_bandwidth;     // Hz, amplifier current loop
+    std::optional<double> eddy_bandwidth;    // Hz, eddy-current force lag
+    std::optional<double> sensor_bandwidth;  // Hz, displacement sensor
+    int substeps = 8;              // RK4 steps per sample for the non-linear force law
+
+    // Throws std::invalid_argument naming the parameter and the value.
+    void validate() const;
+    // Nominal air gap g = i0 Kiy / (-Kyy) (m) of the force law that linearises to kyy, kiy.
+    double gap() const;
+    // Force of the magnet pair on the platform (N) at displacement y (m) and control current i (A).
+    double magnet_force(double y, double i) const;
+};
+
+// Fixed state positions; a stage that is switched off keeps its state at exactly zero.
+namespace state {
+constexpr int y = 0, v = 1, i = 2, i_f = 3, ys = 4, size = 5;
+}
+using StateVector = Eigen::Matrix<double, state::size, 1>;
+using StateMatrix = Eigen::Matrix<double, state::size, state::size>;
+using InputMatrix = Eigen::Matrix<double, state::size, 2>;  // columns: force f, current command
+
+// The state augmented with the two held inputs: X = [x, f, i_cmd]. Inputs are constant over a sample,
+// so X' = [[A, B], [0, 0]] X and its matrix exponential propagates the linear plant exactly.
+namespace augmented {
+constexpr int f = state::size, i_cmd = state::size + 1, size = state::size + 2;
+}
+using AugmentedVector = Eigen::Matrix<double, augmented::size, 1>;
+using Propagator = Eigen::Matrix<double, augmented::size, augmented::size>;
+
+// Linear(ised) continuous model x' = A x + B [f, i_cmd].
+void continuous_model(const Rig& rig, StateMatrix& A, InputMatrix& B);
+
+// exp([[A, B], [0, 0]] h): the exact zero-order-hold map [Phi, Gamma] over h, inputs carried unchanged.
+Propagator propagator(const Rig& rig, double h);
+
+// Index into the augmented state of the current that drives the magnet force: the eddy-current
+// state, else the amplifier state, else the held command itself.
+int force_current_index(const Rig& rig);
+
+// Current that drives the magnet force and the coil current, by which stages are switched on.
+inline double coil_current(const Rig& rig, const StateVector& x, double i_cmd) {
+    return rig.amp_bandwidth ? x[state::i] : i_cmd;
+}
+inline double measured_displacement(const Rig& rig, const StateVector& x) {
+    return rig.sensor_bandwidth ? x[state::ys] : x[state::y];
+}
+
+}  // namespace amb_fast

@@ -1,0 +1,87 @@
+#include "amb_fast/plant.hpp"
+
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include "amb_fast/errors.hpp"
+
+namespace amb_fast {
+
+namespace {
+constexpr double two_pi = 6.283185307179586;
+}
+
+void Rig::validate() const {
+    require_positive("mass", mass, "kg");
+    require(std::isfinite(kyy) && kyy != 0.0, "kyy", kyy, "finite and non-zero (N/m)");
+    require_positive("kiy", kiy, "N/A");
+    require_positive("bias_current", bias_current, "A");
+    if (amp_bandwidth) require_positive("amp_bandwidth", *amp_bandwidth, "Hz");
+    if (eddy_bandwidth) require_positive("eddy_bandwidth", *eddy_bandwidth, "Hz");
+    if (sensor_bandwidth) require_positive("sensor_bandwidth", *sensor_bandwidth, "Hz");
+    require(substeps >= 1, "substeps", substeps, "an integer >= 1");
+    if (force_law == ForceLaw::nonlinear)
+        require(kyy < 0.0, "kyy", kyy, "< 0 for the non-linear force law of a biased magnet pair (N/m)");
+}
+
+double Rig::gap() const { return bias_current * kiy / (-kyy); }
+
+double Rig::magnet_force(double y, double i) const {
+    const double g = gap();
+    const double km = kiy * g * g / (4.0 * bias_current);
+    const double lower = (bias_current - i) / (g - y);
+    const double upper = (bias_current + i) / (g + y);
+    return km * (lower * lower - upper * upper);
+}
+
+void continuous_model(const Rig& rig, StateMatrix& A, InputMatrix& B) {
+    using namespace state;
+    A.setZero();
+    B.setZero();
+    // Where the current driving each stage comes from: a state, or the command itself.
+    auto feed = [&](int row, int source_state, double gain) {
+        if (source_state >= 0)
+            A(row, source_state) += gain;
+        else
+            B(row, 1) += gain;
+    };
+    const int amp = rig.amp_bandwidth ? i : -1;
+    const int eddy = rig.eddy_bandwidth ? i_f : amp;
+
+    A(y, v) = 1.0;
+    A(v, y) = -rig.kyy / rig.mass;
+    B(v, 0) = 1.0 / rig.mass;
+    feed(v, eddy, -rig.kiy / rig.mass);
+    if (rig.amp_bandwidth) {
+        const double wa = two_pi * *rig.amp_bandwidth;
+        A(i, i) = -wa;
+        B(i, 1) = wa;
+    }
+    if (rig.eddy_bandwidth) {
+        const double we = two_pi * *rig.eddy_bandwidth;
+        A(i_f, i_f) = -we;
+        feed(i_f, amp, we);
+    }
+    if (rig.sensor_bandwidth) {
+        const double ws = two_pi * *rig.sensor_bandwidth;
+        A(ys, ys) = -ws;
+        A(ys, y) = ws;
+    }
+}
+
+Propagator propagator(const Rig& rig, double h) {
+    StateMatrix A;
+    InputMatrix B;
+    continuous_model(rig, A, B);
+    Propagator M = Propagator::Zero();
+    M.topLeftCorner<state::size, state::size>() = A * h;
+    M.topRightCorner<state::size, 2>() = B * h;
+    return M.exp();
+}
+
+int force_current_index(const Rig& rig) {
+    if (rig.eddy_bandwidth) return state::i_f;
+    if (rig.amp_bandwidth) return state::i;
+    return augmented::i_cmd;
+}
+
+}  // namespace amb_fast

@@ -1,0 +1,112 @@
+"""Rig and controller parameters (SI units; frequencies in Hz)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from . import _core
+from ._validate import integer, optional_positive, real, require
+
+ForceLaw = Literal["linear", "nonlinear"]
+
+
+@dataclass(frozen=True)
+class Rig:
+    """The one-axis suspension of MODEL.md (defaults: the paper's rig).
+
+    Parameters
+    ----------
+    mass : float
+        Moving mass m, kg.
+    kyy : float
+        Position stiffness of the biased magnet pair, N/m (negative: destabilising).
+    kiy : float
+        Current stiffness, N/A.
+    bias_current : float
+        Bias current i0 of the magnet pair, A (used by the non-linear force law).
+    force_law : {"linear", "nonlinear"}
+        Linearised magnet force, or the differential magnet-pair law that linearises to kyy, kiy.
+    amp_bandwidth, eddy_bandwidth, sensor_bandwidth : float or None
+        First-order lags of the amplifier current loop, the eddy-current force and the displacement
+        sensor, Hz. ``None`` makes the stage ideal.
+    substeps : int
+        RK4 steps per controller sample for the non-linear force law.
+    """
+
+    mass: float = 0.92
+    kyy: float = -53.3e3
+    kiy: float = 47.19
+    bias_current: float = 0.65
+    force_law: ForceLaw = "linear"
+    amp_bandwidth: float | None = None
+    eddy_bandwidth: float | None = None
+    sensor_bandwidth: float | None = None
+    substeps: int = 8
+
+    def __post_init__(self) -> None:
+        real("mass", self.mass, "kg", positive=True)
+        require(real("kyy", self.kyy, "N/m") != 0, "kyy", self.kyy, "non-zero (N/m)")
+        real("kiy", self.kiy, "N/A", positive=True)
+        real("bias_current", self.bias_current, "A", positive=True)
+        require(self.force_law in ("linear", "nonlinear"), "force_law", self.force_law, "'linear' or 'nonlinear'")
+        if self.force_law == "nonlinear":
+            require(self.kyy < 0, "kyy", self.kyy, "< 0 for the non-linear force law (N/m)")
+        for name in ("amp_bandwidth", "eddy_bandwidth", "sensor_bandwidth"):
+            optional_positive(name, getattr(self, name), "Hz")
+        integer("substeps", self.substeps, 1)
+
+    @property
+    def gap(self) -> float:
+        """Nominal air gap g = i0 Kiy / (-Kyy) of the non-linear force law, m."""
+        return self.bias_current * self.kiy / -self.kyy
+
+    def _to_core(self) -> _core.Rig:
+        return _core.Rig(
+            mass=self.mass,
+            kyy=self.kyy,
+            kiy=self.kiy,
+            bias_current=self.bias_current,
+            force_law=_core.ForceLaw.__members__[self.force_law],
+            amp_bandwidth=self.amp_bandwidth,
+            eddy_bandwidth=self.eddy_bandwidth,
+            sensor_bandwidth=self.sensor_bandwidth,
+            substeps=self.substeps,
+        )
+
+
+@dataclass(frozen=True)
+class PID:
+    """The digital PID controller of MODEL.md section 2.
+
+    Parameters
+    ----------
+    kp, ki, kd : float
+        Gains from measured displacement to control current: A/m, A/(m s), A s/m.
+    derivative_cutoff : float or None
+        Corner of the first-order derivative filter, Hz; ``None`` = plain backward difference.
+    fs : float
+        Sampling frequency, Hz.
+    delay : int
+        Computation delay, whole samples.
+    """
+
+    kp: float
+    ki: float
+    kd: float
+    derivative_cutoff: float | None = None
+    fs: float = 4000.0
+    delay: int = 1
+
+    def __post_init__(self) -> None:
+        real("kp", self.kp, "A/m")
+        real("ki", self.ki, "A/(m s)")
+        real("kd", self.kd, "A s/m")
+        optional_positive("derivative_cutoff", self.derivative_cutoff, "Hz")
+        real("fs", self.fs, "Hz", positive=True)
+        integer("delay", self.delay, 0)
+
+    def _to_core(self) -> _core.Pid:
+        return _core.Pid(
+            kp=self.kp, ki=self.ki, kd=self.kd, derivative_cutoff=self.derivative_cutoff, fs=self.fs, delay=self.delay
+        )

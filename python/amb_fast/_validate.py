@@ -1,0 +1,42 @@
+"""One way to reject bad input: name the parameter, the value and what was expected."""
+
+from __future__ import annotations
+
+import math
+from numbers import Integral, Real
+from typing import Any
+
+import numpy as np
+
+
+def require(ok: bool, name: str, value: Any, expected: str) -> None:
+    if not ok:
+        raise ValueError(f"{name} must be {expected}, got {value!r}")
+
+
+def real(name: str, value: Any, unit: str, *, positive: bool = False) -> float:
+    """A finite real number (optionally > 0), returned as float."""
+    is_number = isinstance(value, Real) and not isinstance(value, bool)
+    ok = is_number and math.isfinite(value) and (not positive or value > 0)
+    require(ok, name, value, f"a finite number{' > 0' if positive else ''} ({unit})")
+    return float(value)
+
+
+def optional_positive(name: str, value: Any, unit: str) -> float | None:
+    return None if value is None else real(name, value, unit, positive=True)
+
+
+def integer(name: str, value: Any, minimum: int) -> int:
+    ok = isinstance(value, Integral) and not isinstance(value, bool) and value >= minimum
+    require(ok, name, value, f"a whole number >= {minimum}")
+    return int(value)
+
+
+def finite_series(name: str, values: Any) -> np.ndarray:
+    """A 1-D finite float64 array; a bad sample is named by its index."""
+    array = np.ascontiguousarray(values, dtype=np.float64)
+    require(array.ndim == 1, f"{name} shape", array.shape, "one-dimensional (samples,)")
+    bad = np.flatnonzero(~np.isfinite(array))
+    if bad.size:
+        raise ValueError(f"{name} must be finite, got {array[bad[0]]!r} at sample {bad[0]} ({bad.size} bad samples)")
+    return array

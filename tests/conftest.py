@@ -1,0 +1,26 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import amb_fast as af
+
+# A stable baseline used across the tests: every lag configuration, delay 0-2, with or without the
+# derivative filter and the integral, stays stable with these gains (checked in test_loop.py).
+GAINS = dict(kp=2000.0, ki=20000.0, kd=5.0)
+ALL_LAGS = dict(amp_bandwidth=1500.0, eddy_bandwidth=800.0, sensor_bandwidth=5000.0)
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    return np.random.default_rng(20261121)
+
+
+@pytest.fixture
+def lagged_rig() -> af.Rig:
+    return af.Rig(**ALL_LAGS)
+
+
+@pytest.fixture
+def pid() -> af.PID:
+    return af.PID(**GAINS, derivative_cutoff=1000.0)
