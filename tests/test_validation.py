@@ -37,7 +37,7 @@ BAD_PIDS = [
 ]
 CORE_RIG = dict(
     mass=0.92, kyy=-53.3e3, kiy=47.19, bias_current=0.65, force_law=_core.ForceLaw.linear,
-    amp_bandwidth=None, eddy_bandwidth=None, sensor_bandwidth=None, substeps=8,
+    amp_bandwidth=None, eddy_bandwidth=None, sensor_bandwidth=None, substeps=2,
 )  # fmt: skip
 CORE_PID = dict(kp=2000.0, ki=0.0, kd=5.0, derivative_cutoff=None, fs=4000.0, delay=1)
 

@@ -8,15 +8,28 @@
 
 namespace amb_fast {
 
+namespace {
+// The linear kernel skips the entries of Phi that the cascade structure makes zero; make sure they are.
+void check_cascade_pattern(const Propagator& P) {
+    using namespace state;
+    const double skipped = std::abs(P(i, y)) + std::abs(P(i, v)) + std::abs(P(i, i_f)) + std::abs(P(i_f, y)) +
+                           std::abs(P(i_f, v)) + P.block<4, 1>(0, ys).cwiseAbs().sum();
+    if (skipped > 1e-14 * P.cwiseAbs().maxCoeff())
+        throw std::logic_error("amb_fast: the one-sample map lost its cascade structure; please report this rig");
+}
+}  // namespace
+
 Loop::Loop(const Rig& rig, const Pid& pid)
     : rig_(validated(rig)),
       pid_(validated(pid)),
       T_(pid.period()),
       sensed_(rig.sensor_bandwidth ? state::ys : state::y),
       has_amp_(rig.amp_bandwidth.has_value()),
-      drive_(force_current_index(rig)) {
+      drive_(force_current_index(rig)),
+      magnets_(rig) {
     if (rig_.force_law == ForceLaw::linear) {
         P_ = propagator(rig_, T_);
+        check_cascade_pattern(P_);
     } else {
         const double h = T_ / rig_.substeps;
         P_ = propagator(rig_, h);
@@ -32,21 +45,14 @@ void Loop::run(const double* force, Eigen::Index n, double* displacement, double
 }
 
 void Loop::run_linear(const double* force, Eigen::Index n, double* displacement, double* current) {
-    const StateMatrix Phi = P_.topLeftCorner<state::size, state::size>();
-    const StateVector gamma_f = P_.block<state::size, 1>(0, augmented::f);
-    const StateVector gamma_i = P_.block<state::size, 1>(0, augmented::i_cmd);
-    StateVector x = x_;
-    for (Eigen::Index j = 0; j < n; ++j) {
-        const double e = x[sensed_];
-        const double i_cmd = pid_.step(e);
-        displacement[j] = e;
-        current[j] = has_amp_ ? x[state::i] : i_cmd;
-        // Summed as a tree: the x-to-x dependency chain, not the flop count, bounds this loop.
-        const StateVector inputs = gamma_f * force[j] + gamma_i * i_cmd;
-        x = ((Phi.col(0) * x[0] + Phi.col(1) * x[1]) + (Phi.col(2) * x[2] + Phi.col(3) * x[3])) +
-            (Phi.col(4) * x[4] + inputs);
-    }
-    x_ = x;
+    // Which state the sensor reads and where the coil current comes from are compile-time constants
+    // in the kernel, so the state stays in registers (a run-time index would spill it every sample).
+    if (sensed_ == state::ys)
+        has_amp_ ? run_linear_kernel<state::ys, true>(force, n, displacement, current)
+                 : run_linear_kernel<state::ys, false>(force, n, displacement, current);
+    else
+        has_amp_ ? run_linear_kernel<state::y, true>(force, n, displacement, current)
+                 : run_linear_kernel<state::y, false>(force, n, displacement, current);
     // Inf and NaN never turn finite again in a linear recursion, so one check per chunk suffices.
     if (!x_.allFinite()) {
         Eigen::Index j = 0;
@@ -56,8 +62,42 @@ void Loop::run_linear(const double* force, Eigen::Index n, double* displacement,
     k_ += n;
 }
 
+// The lags form a cascade (amplifier -> eddy current -> platform -> sensor), so the exact one-sample
+// map Phi is block lower-triangular in that order: 16 of its 25 entries can be non-zero. The kernel
+// multiplies only those, in scalars that stay in registers; it is bound by the latency of the
+// sample-to-sample dependency chain, so independent terms are summed pairwise.
+template <int sensed, bool has_amp>
+void Loop::run_linear_kernel(const double* force, Eigen::Index n, double* displacement, double* current) {
+    using namespace state;
+    const Propagator& P = P_;
+    const double yy = P(y, y), yv = P(y, v), yi = P(y, i), yf = P(y, i_f);
+    const double vy = P(v, y), vv = P(v, v), vi = P(v, i), vf = P(v, i_f);
+    const double ii = P(i, i), fi = P(i_f, i), ff = P(i_f, i_f);
+    const double sy = P(ys, y), sv = P(ys, v), si = P(ys, i), sf = P(ys, i_f), ss = P(ys, ys);
+    const double y_f = P(y, augmented::f), v_f = P(v, augmented::f), s_f = P(ys, augmented::f);
+    const double y_u = P(y, augmented::i_cmd), v_u = P(v, augmented::i_cmd), i_u = P(i, augmented::i_cmd);
+    const double f_u = P(i_f, augmented::i_cmd), s_u = P(ys, augmented::i_cmd);
+    double xy = x_[y], xv = x_[v], xi = x_[i], xf = x_[i_f], xs = x_[ys];
+    for (Eigen::Index j = 0; j < n; ++j) {
+        const double e = sensed == ys ? xs : xy;
+        const double u = pid_.step(e);
+        const double fj = force[j];
+        displacement[j] = e;
+        current[j] = has_amp ? xi : u;
+        const double ny = (yy * xy + yv * xv) + (yi * xi + yf * xf) + (y_f * fj + y_u * u);
+        const double nv = (vy * xy + vv * xv) + (vi * xi + vf * xf) + (v_f * fj + v_u * u);
+        const double ns = ((sy * xy + sv * xv) + (si * xi + sf * xf)) + (ss * xs + (s_f * fj + s_u * u));
+        xf = (fi * xi + ff * xf) + f_u * u;
+        xi = ii * xi + i_u * u;
+        xy = ny;
+        xv = nv;
+        xs = ns;
+    }
+    x_ << xy, xv, xi, xf, xs;
+}
+
 void Loop::run_nonlinear(const double* force, Eigen::Index n, double* displacement, double* current) {
-    const double gap = rig_.gap();
+    const double gap = magnets_.g;
     for (Eigen::Index j = 0; j < n; ++j) {
         const double e = x_[sensed_];
         const double i_cmd = pid_.step(e);
@@ -76,24 +116,23 @@ void Loop::run_nonlinear(const double* force, Eigen::Index n, double* displaceme
 // Integrating-factor (Lawson) RK4: the linear plant, lags and held inputs are propagated exactly by
 // the matrix exponential; RK4 integrates only the non-linear remainder of the magnet force, which
 // acts on v alone. Exact when the remainder vanishes, fourth order otherwise, and free of the
-// step-size limit that the fast lags would put on plain RK4.
+// step-size limit that the fast lags would put on plain RK4. Stages need only y and the driving
+// current, so they take two rows of the half-step map, not all of it.
 void Loop::advance_nonlinear(AugmentedVector& X) const {
     using state::v;
+    using state::y;
     const double h = T_ / rig_.substeps;
-    const double kyy = rig_.kyy, kiy = rig_.kiy, inv_m = 1.0 / rig_.mass;
-    const auto remainder = [&](double y, double i) {
-        return (rig_.magnet_force(y, i) + kyy * y + kiy * i) * inv_m;
-    };
+    const double inv_m = 1.0 / rig_.mass;
+    const int d = drive_;
     const auto& E = P_;
     const auto& E2 = P_half_;
-    const int d = drive_;
     for (int s = 0; s < rig_.substeps; ++s) {
-        const AugmentedVector half = E2 * X;
+        const double half_y = E2.row(y).dot(X), half_d = E2.row(d).dot(X);
         const AugmentedVector full = E * X;
-        const double a = remainder(X[state::y], X[d]);
-        const double b = remainder(half[state::y] + 0.5 * h * a * E2(state::y, v), half[d] + 0.5 * h * a * E2(d, v));
-        const double c = remainder(half[state::y], half[d]);
-        const double dd = remainder(full[state::y] + h * c * E2(state::y, v), full[d] + h * c * E2(d, v));
+        const double a = magnets_.remainder(X[y], X[d]) * inv_m;
+        const double b = magnets_.remainder(half_y + 0.5 * h * a * E2(y, v), half_d + 0.5 * h * a * E2(d, v)) * inv_m;
+        const double c = magnets_.remainder(half_y, half_d) * inv_m;
+        const double dd = magnets_.remainder(full[y] + h * c * E2(y, v), full[d] + h * c * E2(d, v)) * inv_m;
         X = full + (h / 6.0) * (a * E.col(v) + 2.0 * (b + c) * E2.col(v));
         X[v] += (h / 6.0) * dd;
     }

@@ -25,13 +25,7 @@ void Rig::validate() const {
 
 double Rig::gap() const { return bias_current * kiy / (-kyy); }
 
-double Rig::magnet_force(double y, double i) const {
-    const double g = gap();
-    const double km = kiy * g * g / (4.0 * bias_current);
-    const double lower = (bias_current - i) / (g - y);
-    const double upper = (bias_current + i) / (g + y);
-    return km * (lower * lower - upper * upper);
-}
+double Rig::magnet_force(double y, double i) const { return MagnetPair(*this).force(y, i); }
 
 void continuous_model(const Rig& rig, StateMatrix& A, InputMatrix& B) {
     using namespace state;

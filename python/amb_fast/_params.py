@@ -31,7 +31,9 @@ class Rig:
         First-order lags of the amplifier current loop, the eddy-current force and the displacement
         sensor, Hz. ``None`` makes the stage ideal.
     substeps : int
-        RK4 steps per controller sample for the non-linear force law.
+        Integrator steps per controller sample for the non-linear force law (integrating-factor RK4:
+        the linear part is exact, the non-linear remainder is fourth order; 2 steps keep the relative
+        error near 3e-7 at a quarter of the air gap).
     """
 
     mass: float = 0.92
@@ -42,7 +44,7 @@ class Rig:
     amp_bandwidth: float | None = None
     eddy_bandwidth: float | None = None
     sensor_bandwidth: float | None = None
-    substeps: int = 8
+    substeps: int = 2
 
     def __post_init__(self) -> None:
         real("mass", self.mass, "kg", positive=True)

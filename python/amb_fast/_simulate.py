@@ -9,7 +9,7 @@ from numpy.typing import ArrayLike
 
 from . import _core
 from ._params import PID, Rig
-from ._validate import finite_series
+from ._validate import series
 
 
 @dataclass(frozen=True)
@@ -53,6 +53,6 @@ def simulate(rig: Rig, pid: PID, force: ArrayLike) -> Trace:
     OverflowError
         If the state stops being finite (an unstable loop) or the platform leaves the air gap.
     """
-    force = finite_series("force", force)
+    force = np.array(series("force", force))  # our own copy: the trace must not change with the input
     displacement, current = _core.simulate(rig._to_core(), pid._to_core(), force)
-    return Trace(force=force.copy(), displacement=displacement, current=current, fs=pid.fs)
+    return Trace(force=force, displacement=displacement, current=current, fs=pid.fs)

@@ -32,10 +32,16 @@ def integer(name: str, value: Any, minimum: int) -> int:
     return int(value)
 
 
-def finite_series(name: str, values: Any) -> np.ndarray:
-    """A 1-D finite float64 array; a bad sample is named by its index."""
+def series(name: str, values: Any) -> np.ndarray:
+    """A 1-D contiguous float64 array (the core checks finiteness sample by sample as it reads)."""
     array = np.ascontiguousarray(values, dtype=np.float64)
     require(array.ndim == 1, f"{name} shape", array.shape, "one-dimensional (samples,)")
+    return array
+
+
+def finite_series(name: str, values: Any) -> np.ndarray:
+    """A 1-D finite float64 array; a bad sample is named by its index."""
+    array = series(name, values)
     bad = np.flatnonzero(~np.isfinite(array))
     if bad.size:
         raise ValueError(f"{name} must be finite, got {array[bad[0]]!r} at sample {bad[0]} ({bad.size} bad samples)")

@@ -22,6 +22,8 @@ public:
 
 private:
     void run_linear(const double* force, Eigen::Index n, double* displacement, double* current);
+    template <int sensed, bool has_amp>
+    void run_linear_kernel(const double* force, Eigen::Index n, double* displacement, double* current);
     void run_nonlinear(const double* force, Eigen::Index n, double* displacement, double* current);
     void advance_nonlinear(AugmentedVector& X) const;
     [[noreturn]] void fail(Eigen::Index sample, const char* what) const;
@@ -34,6 +36,7 @@ private:
     Propagator P_;      // over one sample (linear law) or one substep (non-linear law)
     Propagator P_half_; // over half a substep (non-linear law)
     int drive_;         // augmented index of the force-producing current
+    MagnetPair magnets_;
     StateVector x_ = StateVector::Zero();
     Eigen::Index k_ = 0;
 };

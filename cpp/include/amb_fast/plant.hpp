@@ -19,7 +19,7 @@ struct Rig {
     std::optional<double> amp_bandwidth;     // Hz, amplifier current loop
     std::optional<double> eddy_bandwidth;    // Hz, eddy-current force lag
     std::optional<double> sensor_bandwidth;  // Hz, displacement sensor
-    int substeps = 8;              // RK4 steps per sample for the non-linear force law
+    int substeps = 2;              // integrator steps per sample for the non-linear force law
 
     // Throws std::invalid_argument naming the parameter and the value.
     void validate() const;
@@ -27,6 +27,23 @@ struct Rig {
     double gap() const;
     // Force of the magnet pair on the platform (N) at displacement y (m) and control current i (A).
     double magnet_force(double y, double i) const;
+};
+
+// The differential magnet pair of MODEL.md section 4, its constants worked out once:
+// F = km [ (i0 - i)^2 / (g - y)^2 - (i0 + i)^2 / (g + y)^2 ], linearising to -kyy y - kiy i.
+struct MagnetPair {
+    explicit MagnetPair(const Rig& rig)
+        : i0(rig.bias_current), g(rig.gap()), km(rig.kiy * g * g / (4.0 * i0)), kyy(rig.kyy), kiy(rig.kiy) {}
+
+    double force(double y, double i) const {
+        const double r = 1.0 / ((g - y) * (g + y));  // one division for both coils
+        const double lower = (i0 - i) * (g + y) * r, upper = (i0 + i) * (g - y) * r;
+        return km * (lower * lower - upper * upper);
+    }
+    // What the linearised law leaves out: force(y, i) - (-kyy y - kiy i).
+    double remainder(double y, double i) const { return force(y, i) + kyy * y + kiy * i; }
+
+    double i0, g, km, kyy, kiy;
 };
 
 // Fixed state positions; a stage that is switched off keeps its state at exactly zero.

@@ -1,0 +1,104 @@
+"""Time per simulated sample of the compiled loop against its peers, measured in one run.
+
+"amb_fast linear" is the compiled core as called by amb_fast.simulate; the row below it adds the
+Python layer's input handling (conversion and a private copy of the force). Peers: the pure-numpy reference loop, scipy.signal.dlsim and python-control's forced_response on the
+same closed loop as one discrete state space, and scipy.signal.lfilter on its force-to-displacement
+transfer function (the compiled floor for a linear recursion of that order). Prints ratios (medians
+of repeated runs; the machine is noisy) and writes JSON.
+
+    python bench/bench_core.py [--quick] [--out bench/results/bench_core.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+from scipy import signal
+
+import amb_fast as af
+from amb_fast import reference
+
+
+def per_sample(run, samples: int, repeats: int) -> float:
+    """Median seconds per sample over ``repeats`` timed calls (after one warm-up)."""
+    run()
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        run()
+        times.append(time.perf_counter() - start)
+    return float(np.median(times)) / samples
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="short smoke run (CI)")
+    parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "bench_core.json")
+    args = parser.parse_args()
+
+    long_n, slow_n, repeats = (20_000, 2_000, 3) if args.quick else (1_000_000, 20_000, 15)
+    rig = af.Rig(amp_bandwidth=1500.0, eddy_bandwidth=800.0, sensor_bandwidth=5000.0)
+    pid = af.PID(kp=2000.0, ki=20000.0, kd=5.0, derivative_cutoff=1000.0)
+    force = np.random.default_rng(0).standard_normal(long_n)
+    short = force[:slow_n]
+
+    A, B, C, D = reference.closed_loop(rig, pid)
+    dt = 1.0 / pid.fs
+    b, a = signal.ss2tf(A, B, C[:1], D[:1])
+    core_rig, core_pid = rig._to_core(), pid._to_core()
+    timings = {
+        "amb_fast linear (all lags)": per_sample(lambda: af._core.simulate(core_rig, core_pid, force), long_n, repeats),
+        "amb_fast.simulate (+ validation, copy)": per_sample(lambda: af.simulate(rig, pid, force), long_n, repeats),
+        "amb_fast nonlinear (all lags)": per_sample(
+            lambda: af.simulate(replace(rig, force_law="nonlinear"), pid, 0.01 * force), long_n, repeats
+        ),
+        "scipy.signal.lfilter (closed-loop TF)": per_sample(lambda: signal.lfilter(b[0], a, force), long_n, repeats),
+        "numpy reference loop": per_sample(lambda: reference.simulate(rig, pid, short), slow_n, max(1, repeats // 5)),
+        "scipy.signal.dlsim": per_sample(lambda: signal.dlsim((A, B, C, D, dt), short), slow_n, max(1, repeats // 5)),
+    }
+    try:
+        import control
+
+        system = control.ss(A, B, C, D, dt)
+        time_axis = np.arange(slow_n) * dt
+        timings["control.forced_response"] = per_sample(
+            lambda: control.forced_response(system, time_axis, short), slow_n, max(1, repeats // 5)
+        )
+    except ImportError:
+        print("python-control not installed (pip install 'amb_fast[bench]'): skipping that peer")
+
+    core = timings["amb_fast linear (all lags)"]
+    lfilter = timings["scipy.signal.lfilter (closed-loop TF)"]
+    print(f"closed-loop order {A.shape[0]}, {long_n} samples (slow peers: {slow_n}), median of {repeats}")
+    print(f"{'':42s} {'ns/sample':>10s} {'x amb_fast linear':>18s}")
+    for name, seconds in timings.items():
+        print(f"{name:42s} {seconds * 1e9:10.2f} {seconds / core:18.2f}")
+    summary = {
+        "numpy reference / core (target >= 300)": timings["numpy reference loop"] / core,
+        "core / lfilter (target <= 1.5)": core / lfilter,
+        "nonlinear / linear (target <= 10)": timings["amb_fast nonlinear (all lags)"] / core,
+    }
+    for name, value in summary.items():
+        print(f"{name:42s} {value:10.2f}")
+
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    result = {
+        "machine": platform.platform(),
+        "processor": platform.processor(),
+        "samples": long_n,
+        "repeats": repeats,
+        "seconds_per_sample": timings,
+        "ratios": summary,
+    }
+    args.out.write_text(json.dumps(result, indent=2))
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
