@@ -48,7 +48,7 @@ def main() -> None:
     force = np.random.default_rng(0).standard_normal(long_n)
     short = force[:slow_n]
 
-    A, B, C, D = reference.closed_loop(rig, pid)
+    A, B, C, D = af.closed_loop(rig, pid)
     dt = 1.0 / pid.fs
     b, a = signal.ss2tf(A, B, C[:1], D[:1])
     core_rig, core_pid = rig._to_core(), pid._to_core()

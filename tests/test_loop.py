@@ -39,7 +39,7 @@ def test_core_matches_numpy_reference(lags: int, delay: int, cutoff: float | Non
     np.testing.assert_array_equal(trace.force, force)
     # The configuration is a stable loop: the response stays bounded (no quiet growth hidden by the
     # relative measure).
-    A, *_ = reference.closed_loop(rig, pid)
+    A, *_ = af.closed_loop(rig, pid)
     assert np.max(np.abs(np.linalg.eigvals(A))) <= 1.0 + 1e-12
 
 
@@ -47,7 +47,7 @@ def test_core_matches_closed_loop_state_space(lagged_rig, pid, rng) -> None:
     """A third route: the whole loop as one discrete state space, run by scipy.signal.dlsim."""
     force = rng.standard_normal(4000)
     trace = af.simulate(lagged_rig, pid, force)
-    _, outputs, _ = signal.dlsim(reference.closed_loop(lagged_rig, pid) + (1 / pid.fs,), force)
+    _, outputs, _ = signal.dlsim(af.closed_loop(lagged_rig, pid) + (1 / pid.fs,), force)
     assert relative_error(trace.displacement, outputs[:, 0]) < TOL
     assert relative_error(trace.current, outputs[:, 1]) < TOL
 

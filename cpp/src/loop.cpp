@@ -1,5 +1,6 @@
 #include "amb_fast/loop.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -19,14 +20,16 @@ void check_cascade_pattern(const Propagator& P) {
 }
 }  // namespace
 
-Loop::Loop(const Rig& rig, const Pid& pid)
+Loop::Loop(const Rig& rig, const Pid& pid, std::uint64_t seed)
     : rig_(validated(rig)),
       pid_(validated(pid)),
       T_(pid.period()),
       sensed_(rig.sensor_bandwidth ? state::ys : state::y),
       has_amp_(rig.amp_bandwidth.has_value()),
       drive_(force_current_index(rig)),
-      magnets_(rig) {
+      magnets_(rig),
+      sensor_rng_(seed),
+      force_rng_(seed ^ 0x9e3779b97f4a7c15ULL) {
     if (rig_.force_law == ForceLaw::linear) {
         P_ = propagator(rig_, T_);
         check_cascade_pattern(P_);
@@ -37,29 +40,27 @@ Loop::Loop(const Rig& rig, const Pid& pid)
     }
 }
 
-void Loop::run(const double* force, Eigen::Index n, double* displacement, double* current) {
-    if (rig_.force_law == ForceLaw::linear)
-        run_linear(force, n, displacement, current);
-    else
-        run_nonlinear(force, n, displacement, current);
-}
-
-void Loop::run_linear(const double* force, Eigen::Index n, double* displacement, double* current) {
-    // Which state the sensor reads and where the coil current comes from are compile-time constants
-    // in the kernel, so the state stays in registers (a run-time index would spill it every sample).
-    if (sensed_ == state::ys)
-        has_amp_ ? run_linear_kernel<state::ys, true>(force, n, displacement, current)
-                 : run_linear_kernel<state::ys, false>(force, n, displacement, current);
-    else
-        has_amp_ ? run_linear_kernel<state::y, true>(force, n, displacement, current)
-                 : run_linear_kernel<state::y, false>(force, n, displacement, current);
-    // Inf and NaN never turn finite again in a linear recursion, so one check per chunk suffices.
-    if (!x_.allFinite()) {
-        Eigen::Index j = 0;
-        while (j < n && std::isfinite(displacement[j])) ++j;
-        fail(k_ + j, "the displacement became non-finite: the loop is unstable");
+void Loop::run(const double* force, Eigen::Index n, Channels out) {
+    for (Eigen::Index start = 0; start < n; start += chunk) {
+        const Eigen::Index m = std::min(chunk, n - start);
+        const Channels part{out.force + start, out.displacement + start, out.current + start};
+        if (rig_.sensor_noise > 0.0)
+            for (Eigen::Index j = 0; j < m; ++j) sensor_noise_[j] = rig_.sensor_noise * sensor_normal_(sensor_rng_);
+        const double* noise = sensor_noise_.data();
+        if (rig_.force_law == ForceLaw::nonlinear)
+            run_nonlinear(force + start, m, part, noise);
+        // Which state the sensor reads and where the coil current comes from are compile-time
+        // constants in the kernel, so the state stays in registers.
+        else if (sensed_ == state::ys)
+            has_amp_ ? run_linear<state::ys, true>(force + start, m, part, noise)
+                     : run_linear<state::ys, false>(force + start, m, part, noise);
+        else
+            has_amp_ ? run_linear<state::y, true>(force + start, m, part, noise)
+                     : run_linear<state::y, false>(force + start, m, part, noise);
+        for (Eigen::Index j = 0; j < m; ++j)
+            part.force[j] = force[start + j] + (rig_.force_noise > 0.0 ? rig_.force_noise * force_normal_(force_rng_) : 0.0);
+        k_ += m;
     }
-    k_ += n;
 }
 
 // The lags form a cascade (amplifier -> eddy current -> platform -> sensor), so the exact one-sample
@@ -67,7 +68,7 @@ void Loop::run_linear(const double* force, Eigen::Index n, double* displacement,
 // multiplies only those, in scalars that stay in registers; it is bound by the latency of the
 // sample-to-sample dependency chain, so independent terms are summed pairwise.
 template <int sensed, bool has_amp>
-void Loop::run_linear_kernel(const double* force, Eigen::Index n, double* displacement, double* current) {
+void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise) {
     using namespace state;
     const Propagator& P = P_;
     const double yy = P(y, y), yv = P(y, v), yi = P(y, i), yf = P(y, i_f);
@@ -79,11 +80,11 @@ void Loop::run_linear_kernel(const double* force, Eigen::Index n, double* displa
     const double f_u = P(i_f, augmented::i_cmd), s_u = P(ys, augmented::i_cmd);
     double xy = x_[y], xv = x_[v], xi = x_[i], xf = x_[i_f], xs = x_[ys];
     for (Eigen::Index j = 0; j < n; ++j) {
-        const double e = sensed == ys ? xs : xy;
+        const double e = (sensed == ys ? xs : xy) + noise[j];
         const double u = pid_.step(e);
         const double fj = force[j];
-        displacement[j] = e;
-        current[j] = has_amp ? xi : u;
+        out.displacement[j] = e;
+        out.current[j] = has_amp ? xi : u;
         const double ny = (yy * xy + yv * xv) + (yi * xi + yf * xf) + (y_f * fj + y_u * u);
         const double nv = (vy * xy + vv * xv) + (vi * xi + vf * xf) + (v_f * fj + v_u * u);
         const double ns = ((sy * xy + sv * xv) + (si * xi + sf * xf)) + (ss * xs + (s_f * fj + s_u * u));
@@ -94,23 +95,27 @@ void Loop::run_linear_kernel(const double* force, Eigen::Index n, double* displa
         xs = ns;
     }
     x_ << xy, xv, xi, xf, xs;
+    // Inf and NaN never turn finite again in a linear recursion, so one check per chunk suffices.
+    if (!x_.allFinite()) {
+        Eigen::Index j = 0;
+        while (j < n && std::isfinite(out.displacement[j])) ++j;
+        fail(k_ + j, "the displacement became non-finite: the loop is unstable");
+    }
 }
 
-void Loop::run_nonlinear(const double* force, Eigen::Index n, double* displacement, double* current) {
-    const double gap = magnets_.g;
+void Loop::run_nonlinear(const double* force, Eigen::Index n, Channels out, const double* noise) {
     for (Eigen::Index j = 0; j < n; ++j) {
-        const double e = x_[sensed_];
+        const double e = x_[sensed_] + noise[j];
         const double i_cmd = pid_.step(e);
-        displacement[j] = e;
-        current[j] = has_amp_ ? x_[state::i] : i_cmd;
+        out.displacement[j] = e;
+        out.current[j] = has_amp_ ? x_[state::i] : i_cmd;
         AugmentedVector X;
         X << x_, force[j], i_cmd;
         advance_nonlinear(X);
         x_ = X.head<state::size>();
-        if (!(std::abs(x_[state::y]) < gap))  // also catches NaN
+        if (!(std::abs(x_[state::y]) < magnets_.g))  // also catches NaN
             fail(k_ + j + 1, "the platform reached the magnet air gap (non-linear force law)");
     }
-    k_ += n;
 }
 
 // Integrating-factor (Lawson) RK4: the linear plant, lags and held inputs are propagated exactly by
@@ -144,17 +149,11 @@ void Loop::fail(Eigen::Index sample, const char* what) const {
     throw std::overflow_error(msg.str());
 }
 
-void simulate(const Rig& rig, const Pid& pid, const double* force, Eigen::Index n, double* displacement,
-              double* current) {
-    for (Eigen::Index k = 0; k < n; ++k) {
-        if (!std::isfinite(force[k])) {
-            std::ostringstream msg;
-            msg << "force must be finite, got " << force[k] << " at sample " << k;
-            throw std::invalid_argument(msg.str());
-        }
-    }
-    Loop loop(rig, pid);
-    loop.run(force, n, displacement, current);
+void simulate(const Rig& rig, const Pid& pid, const double* force, Eigen::Index n, Channels out,
+              std::uint64_t seed) {
+    require_finite_samples("force", force, n);
+    Loop loop(rig, pid, seed);
+    loop.run(force, n, out);
 }
 
 }  // namespace amb_fast

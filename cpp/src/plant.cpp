@@ -19,6 +19,8 @@ void Rig::validate() const {
     if (eddy_bandwidth) require_positive("eddy_bandwidth", *eddy_bandwidth, "Hz");
     if (sensor_bandwidth) require_positive("sensor_bandwidth", *sensor_bandwidth, "Hz");
     require(substeps >= 1, "substeps", substeps, "an integer >= 1");
+    require(std::isfinite(sensor_noise) && sensor_noise >= 0.0, "sensor_noise", sensor_noise, "finite and >= 0 (m rms)");
+    require(std::isfinite(force_noise) && force_noise >= 0.0, "force_noise", force_noise, "finite and >= 0 (N rms)");
     if (force_law == ForceLaw::nonlinear)
         require(kyy < 0.0, "kyy", kyy, "< 0 for the non-linear force law of a biased magnet pair (N/m)");
 }

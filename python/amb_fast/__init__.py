@@ -15,7 +15,20 @@ except ImportError as error:  # pragma: no cover - only without a built extensio
         "from the project root (it compiles the C++ core), not by putting python/ on the path."
     ) from error
 
+from ._errors import UnstableLoopError
+from ._excitation import Multisine, schroeder_multisine
+from ._experiment import Estimate, UnexcitedLines, identify, run_experiment
+from ._linear import (
+    StabilityMargin,
+    closed_loop,
+    closed_loop_poles,
+    effective_coefficients,
+    predict,
+    sensitivity,
+    stability_margin,
+)
 from ._params import PID, Rig
+from ._recording import Recording, load_recording, save_recording
 from ._simulate import Trace, simulate
 
 try:
@@ -23,4 +36,27 @@ try:
 except PackageNotFoundError:  # pragma: no cover
     __version__ = "unknown"
 
-__all__ = ["PID", "Rig", "Trace", "simulate", "__version__"]
+__all__ = [
+    "PID",
+    "Estimate",
+    "Multisine",
+    "Recording",
+    "Rig",
+    "StabilityMargin",
+    "Trace",
+    "UnexcitedLines",
+    "UnstableLoopError",
+    "__version__",
+    "closed_loop",
+    "closed_loop_poles",
+    "effective_coefficients",
+    "identify",
+    "load_recording",
+    "predict",
+    "run_experiment",
+    "save_recording",
+    "schroeder_multisine",
+    "sensitivity",
+    "simulate",
+    "stability_margin",
+]

@@ -30,6 +30,10 @@ class Rig:
     amp_bandwidth, eddy_bandwidth, sensor_bandwidth : float or None
         First-order lags of the amplifier current loop, the eddy-current force and the displacement
         sensor, Hz. ``None`` makes the stage ideal.
+    sensor_noise : float
+        White noise on the displacement sensor output, m rms (the controller sees it too).
+    force_noise : float
+        White noise on the recorded force (force transducer), N rms; the applied force is clean.
     substeps : int
         Integrator steps per controller sample for the non-linear force law (integrating-factor RK4:
         the linear part is exact, the non-linear remainder is fourth order; 2 steps keep the relative
@@ -45,6 +49,8 @@ class Rig:
     eddy_bandwidth: float | None = None
     sensor_bandwidth: float | None = None
     substeps: int = 2
+    sensor_noise: float = 0.0
+    force_noise: float = 0.0
 
     def __post_init__(self) -> None:
         real("mass", self.mass, "kg", positive=True)
@@ -57,6 +63,8 @@ class Rig:
         for name in ("amp_bandwidth", "eddy_bandwidth", "sensor_bandwidth"):
             optional_positive(name, getattr(self, name), "Hz")
         integer("substeps", self.substeps, 1)
+        require(real("sensor_noise", self.sensor_noise, "m rms") >= 0, "sensor_noise", self.sensor_noise, ">= 0 (m rms)")
+        require(real("force_noise", self.force_noise, "N rms") >= 0, "force_noise", self.force_noise, ">= 0 (N rms)")
 
     @property
     def gap(self) -> float:
@@ -74,6 +82,8 @@ class Rig:
             eddy_bandwidth=self.eddy_bandwidth,
             sensor_bandwidth=self.sensor_bandwidth,
             substeps=self.substeps,
+            sensor_noise=self.sensor_noise,
+            force_noise=self.force_noise,
         )
 
 

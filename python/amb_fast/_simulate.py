@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
 from ._params import PID, Rig
-from ._validate import series
+from ._validate import seed_value, series
 
 
 @dataclass(frozen=True)
@@ -19,9 +20,9 @@ class Trace:
     Attributes
     ----------
     force : ndarray
-        Excitation force f[k] sent to the shaker, N.
+        Recorded force, N: the force f[k] sent to the shaker plus the transducer noise, if any.
     displacement : ndarray
-        Displacement sensor output ys(kT), m.
+        Displacement sensor output ys(kT) plus sensor noise, if any, m.
     current : ndarray
         Coil control current at kT, A.
     fs : float
@@ -38,13 +39,19 @@ class Trace:
         """Sample instants kT, s."""
         return np.arange(self.force.size) / self.fs
 
+    def save(self, path: str | Path) -> None:
+        """Write force and displacement as a recording (``.csv`` or ``.mat``), see :func:`load_recording`."""
+        from ._recording import save_recording
 
-def simulate(rig: Rig, pid: PID, force: ArrayLike) -> Trace:
+        save_recording(path, force=self.force, displacement=self.displacement, fs=self.fs)
+
+
+def simulate(rig: Rig, pid: PID, force: ArrayLike, *, seed: int | None = None) -> Trace:
     """Run the closed loop on a force sequence (N) sampled at ``pid.fs``, from rest.
 
     The force is zero-order held between samples (a DAC). The linear force law is discretised exactly;
     the non-linear one is integrated with RK4, ``rig.substeps`` steps per sample. The GIL is released
-    while the core runs.
+    while the core runs. ``seed`` fixes the measurement noise of a rig that has some.
 
     Raises
     ------
@@ -53,6 +60,6 @@ def simulate(rig: Rig, pid: PID, force: ArrayLike) -> Trace:
     OverflowError
         If the state stops being finite (an unstable loop) or the platform leaves the air gap.
     """
-    force = np.array(series("force", force))  # our own copy: the trace must not change with the input
-    displacement, current = _core.simulate(rig._to_core(), pid._to_core(), force)
-    return Trace(force=force, displacement=displacement, current=current, fs=pid.fs)
+    force = series("force", force)
+    recorded, displacement, current = _core.simulate(rig._to_core(), pid._to_core(), force, seed_value(seed))
+    return Trace(force=recorded, displacement=displacement, current=current, fs=pid.fs)

@@ -46,3 +46,10 @@ def finite_series(name: str, values: Any) -> np.ndarray:
     if bad.size:
         raise ValueError(f"{name} must be finite, got {array[bad[0]]!r} at sample {bad[0]} ({bad.size} bad samples)")
     return array
+
+
+def seed_value(seed: Any) -> int:
+    """A 64-bit seed for the core's noise generator; ``None`` draws a fresh one."""
+    if seed is None:
+        return int(np.random.SeedSequence().generate_state(1, np.uint64)[0])
+    return integer("seed", seed, 0) % 2**64

@@ -11,49 +11,8 @@ from collections import deque
 import numpy as np
 from scipy.signal import cont2discrete
 
+from ._linear import plant_matrices
 from ._params import PID, Rig
-
-
-def plant_matrices(rig: Rig) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """Continuous ``A``, ``B`` (inputs: force N, current command A) over the active states.
-
-    States, in order, are ``y, v`` and then whichever of ``i`` (amplifier), ``i_f`` (eddy current) and
-    ``ys`` (sensor) are switched on.
-    """
-    states = ["y", "v"] + [
-        name
-        for name, bandwidth in (("i", rig.amp_bandwidth), ("i_f", rig.eddy_bandwidth), ("ys", rig.sensor_bandwidth))
-        if bandwidth is not None
-    ]
-    n = len(states)
-    A = np.zeros((n, n))
-    B = np.zeros((n, 2))
-
-    def term(row: str, source: str, gain: float) -> None:
-        if source == "cmd":
-            B[states.index(row), 1] += gain
-        else:
-            A[states.index(row), states.index(source)] += gain
-
-    coil = "i" if "i" in states else "cmd"
-    driving = "i_f" if "i_f" in states else coil
-    term("y", "v", 1.0)
-    term("v", "y", -rig.kyy / rig.mass)
-    term("v", driving, -rig.kiy / rig.mass)
-    B[states.index("v"), 0] = 1.0 / rig.mass
-    if "i" in states:
-        wa = 2 * np.pi * rig.amp_bandwidth
-        term("i", "i", -wa)
-        term("i", "cmd", wa)
-    if "i_f" in states:
-        we = 2 * np.pi * rig.eddy_bandwidth
-        term("i_f", "i_f", -we)
-        term("i_f", coil, we)
-    if "ys" in states:
-        ws = 2 * np.pi * rig.sensor_bandwidth
-        term("ys", "ys", -ws)
-        term("ys", "y", ws)
-    return A, B, states
 
 
 def magnet_force(rig: Rig, y: float, i: float) -> float:
@@ -116,47 +75,37 @@ def _rk4_sample(rig: Rig, states: list[str], x: np.ndarray, f: float, i_cmd: flo
     return x
 
 
-def closed_loop(rig: Rig, pid: PID) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The linear loop as one discrete state space ``(A, B, C, D)`` with sample period ``1/fs``.
 
-    Input: force f[k] (N). Outputs: sensor displacement ys(kT) (m) and coil current (A). State: the
-    plant's, then the PID's integral I[k-1], derivative D[k-1], last error e[k-1], and the delay line
-    u[k-1], ..., u[k-d].
-    """
+def receptance(rig: Rig, pid: PID, freq: np.ndarray) -> np.ndarray:
+    """Y/F at ``freq`` (Hz) by composing transfer functions, not by the closed-loop state space:
+    ys/f = P_f / (1 - P_i G z^-d), with the plant's two ZOH transfer functions P_f, P_i from
+    :func:`scipy.signal.cont2discrete` and the digital PID G(z) written out from MODEL.md."""
     T = 1.0 / pid.fs
     A, B, states = plant_matrices(rig)
     n = len(states)
+    sensed = states.index("ys") if "ys" in states else 0
     Phi, Gamma, *_ = cont2discrete((A, B, np.eye(n), np.zeros((n, 2))), T, method="zoh")
+    z = np.exp(2j * np.pi * np.asarray(freq, dtype=float) * T)
+    P = np.array([np.linalg.solve(zk * np.eye(n) - Phi, Gamma)[sensed] for zk in z])  # (freq, 2)
     a = np.exp(-2 * np.pi * pid.derivative_cutoff * T) if pid.derivative_cutoff is not None else 0.0
-    kd_gain = pid.kd * (1 - a) / T
-    d = pid.delay
-    size = n + 3 + d
-    I_, D_, E_ = n, n + 1, n + 2  # positions of I[k-1], D[k-1], e[k-1]
-    sensor = np.zeros(size)
-    sensor[states.index("ys") if "ys" in states else 0] = 1.0
+    G = pid.kp + pid.ki * T / (1 - 1 / z) + pid.kd * (1 - a) * (1 - 1 / z) / (T * (1 - a / z))
+    return P[:, 0] / (1 - P[:, 1] * G * z ** (-pid.delay))
 
-    # u[k] = (kp + ki T + kd_gain) e[k] + I[k-1] + a D[k-1] - kd_gain e[k-1], e[k] = sensor . z
-    u = (pid.kp + pid.ki * T + kd_gain) * sensor
-    u[I_] += 1.0
-    u[D_] += a
-    u[E_] -= kd_gain
-    i_cmd = u if d == 0 else np.eye(size)[n + 3 + d - 1]
 
-    Acl = np.zeros((size, size))
-    Acl[:n, :n] = Phi
-    Acl[:n] += np.outer(Gamma[:, 1], i_cmd)
-    Acl[I_] = pid.ki * T * sensor
-    Acl[I_, I_] += 1.0
-    Acl[D_] = kd_gain * sensor
-    Acl[D_, D_] += a
-    Acl[D_, E_] -= kd_gain
-    Acl[E_] = sensor
-    if d:
-        Acl[n + 3] = u
-        for j in range(1, d):
-            Acl[n + 3 + j, n + 3 + j - 1] = 1.0
-    Bcl = np.zeros((size, 1))
-    Bcl[:n, 0] = Gamma[:, 0]
-    current = np.eye(size)[states.index("i")] if "i" in states else i_cmd
-    Ccl = np.vstack([sensor, current])
-    return Acl, Bcl, Ccl, np.zeros((2, 1))
+def pipeline(
+    force: np.ndarray, displacement: np.ndarray, period: int, lines: np.ndarray, mass: float, fs: float, window: int
+) -> dict[str, np.ndarray]:
+    """The estimation pipeline in plain numpy: reshape-mean, rfft, H = F/Y, eq. 9, median filter.
+
+    ``lines`` are harmonic numbers; the record must be whole periods, already settled.
+    """
+    from scipy.ndimage import median_filter
+
+    F = np.fft.rfft(force.reshape(-1, period).mean(axis=0))[lines] * 2 / period
+    Y = np.fft.rfft(displacement.reshape(-1, period).mean(axis=0))[lines] * 2 / period
+    H = F / Y
+    w = 2 * np.pi * lines * fs / period
+    k = mass * w**2 + H.real
+    c = H.imag / w
+    smooth = {name: median_filter(v, size=window, mode="nearest") for name, v in (("k", k), ("c", c))}
+    return {"force": F, "displacement": Y, "H": H, "k": k, "c": c, "k_smooth": smooth["k"], "c_smooth": smooth["c"]}

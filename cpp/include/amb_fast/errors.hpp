@@ -22,6 +22,17 @@ inline void require_positive(const char* name, double value, const char* unit) {
             (std::string("a finite number > 0 (") + unit + ")").c_str());
 }
 
+// Names the first non-finite sample of a series; `first` is the index of values[0] in the record.
+inline void require_finite_samples(const char* name, const double* values, long n, long first = 0) {
+    for (long k = 0; k < n; ++k) {
+        if (!std::isfinite(values[k])) {
+            std::ostringstream msg;
+            msg << name << " must be finite, got " << values[k] << " at sample " << first + k;
+            throw std::invalid_argument(msg.str());
+        }
+    }
+}
+
 // For member initialisers: validates, then passes the parameters on.
 template <class Params>
 const Params& validated(const Params& params) {

@@ -1,49 +1,63 @@
-// The sampled-data closed loop: plant between samples, PID at the samples.
+// The sampled-data closed loop: plant between samples, PID at the samples, noisy measurements.
 #pragma once
 
 #include <Eigen/Dense>
+#include <cstdint>
+#include <random>
 
 #include "amb_fast/controller.hpp"
 #include "amb_fast/plant.hpp"
 
 namespace amb_fast {
 
+// One output sample block of the recorded channels, all at fs.
+struct Channels {
+    double* force;         // N, recorded force: applied force plus transducer noise
+    double* displacement;  // m, sensor output ys(kT) plus sensor noise (what the controller reads)
+    double* current;       // A, coil current at kT
+};
+
 // The loop keeps its state between calls to run(), so a long experiment can be streamed in chunks.
 class Loop {
 public:
-    Loop(const Rig& rig, const Pid& pid);
+    // The seed fixes the measurement noise; it is unused when the rig has none.
+    Loop(const Rig& rig, const Pid& pid, std::uint64_t seed = 0);
 
-    // Advances n samples of zero-order-held force (N). Writes the sensor output ys(kT) (m) and the
-    // coil current at kT (A). Throws std::overflow_error if the state stops being finite, and, for the
-    // non-linear force law, if the platform reaches the air gap.
-    void run(const double* force, Eigen::Index n, double* displacement, double* current);
+    // Advances n samples of zero-order-held force (N) and records them. Throws std::overflow_error if
+    // the state stops being finite and, for the non-linear force law, if the platform reaches the gap.
+    void run(const double* force, Eigen::Index n, Channels out);
 
     Eigen::Index samples_done() const { return k_; }
 
 private:
-    void run_linear(const double* force, Eigen::Index n, double* displacement, double* current);
+    static constexpr Eigen::Index chunk = 1024;  // noise is drawn a chunk at a time
+
     template <int sensed, bool has_amp>
-    void run_linear_kernel(const double* force, Eigen::Index n, double* displacement, double* current);
-    void run_nonlinear(const double* force, Eigen::Index n, double* displacement, double* current);
+    void run_linear(const double* force, Eigen::Index n, Channels out, const double* noise);
+    void run_nonlinear(const double* force, Eigen::Index n, Channels out, const double* noise);
     void advance_nonlinear(AugmentedVector& X) const;
     [[noreturn]] void fail(Eigen::Index sample, const char* what) const;
 
     Rig rig_;
     DigitalPid pid_;
     double T_;
-    int sensed_;        // state read by the sensor: ys, or y itself
-    bool has_amp_;      // coil current is a state, or the command itself
-    Propagator P_;      // over one sample (linear law) or one substep (non-linear law)
-    Propagator P_half_; // over half a substep (non-linear law)
-    int drive_;         // augmented index of the force-producing current
+    int sensed_;         // state read by the sensor: ys, or y itself
+    bool has_amp_;       // coil current is a state, or the command itself
+    Propagator P_;       // over one sample (linear law) or one substep (non-linear law)
+    Propagator P_half_;  // over half a substep (non-linear law)
+    int drive_;          // augmented index of the force-producing current
     MagnetPair magnets_;
     StateVector x_ = StateVector::Zero();
     Eigen::Index k_ = 0;
+    // One stream per noise source, so the draws do not depend on how a run is cut into chunks.
+    std::mt19937_64 sensor_rng_, force_rng_;
+    std::normal_distribution<double> sensor_normal_, force_normal_;
+    Eigen::VectorXd sensor_noise_ = Eigen::VectorXd::Zero(chunk);
 };
 
-// Runs the loop from rest on n force samples (N); writes the sensor displacement (m) and the coil
-// current (A) at every sample. Throws std::invalid_argument on a non-finite force sample.
-void simulate(const Rig& rig, const Pid& pid, const double* force, Eigen::Index n, double* displacement,
-              double* current);
+// Runs the loop from rest on n force samples (N) and records the channels. Throws
+// std::invalid_argument on a non-finite force sample.
+void simulate(const Rig& rig, const Pid& pid, const double* force, Eigen::Index n, Channels out,
+              std::uint64_t seed = 0);
 
 }  // namespace amb_fast

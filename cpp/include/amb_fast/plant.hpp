@@ -20,6 +20,8 @@ struct Rig {
     std::optional<double> eddy_bandwidth;    // Hz, eddy-current force lag
     std::optional<double> sensor_bandwidth;  // Hz, displacement sensor
     int substeps = 2;              // integrator steps per sample for the non-linear force law
+    double sensor_noise = 0.0;     // m rms, white, added to the sensor output (seen by the controller too)
+    double force_noise = 0.0;      // N rms, white, added to the recorded force (not to the applied one)
 
     // Throws std::invalid_argument naming the parameter and the value.
     void validate() const;

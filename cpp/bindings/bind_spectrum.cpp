@@ -1,0 +1,51 @@
+#include "amb_fast/experiment.hpp"
+#include "bindings.hpp"
+
+using namespace amb_fast;
+
+namespace {
+using InputArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+}
+
+void bind_spectrum(py::module_& m) {
+    py::class_<LinePlan>(m, "LinePlan", "Period length (samples) and the harmonic numbers of excited/unexcited lines.")
+        .def(py::init([](Eigen::Index period, std::vector<Eigen::Index> excited, std::vector<Eigen::Index> unexcited) {
+                 LinePlan plan{period, std::move(excited), std::move(unexcited), 1};
+                 plan.validate();
+                 return plan;
+             }),
+             py::kw_only(), py::arg("period"), py::arg("excited"), py::arg("unexcited"));
+
+    py::class_<LineEstimate>(m, "LineEstimate", "Raw estimator output (see amb_fast.Estimate for units).")
+        .def_readonly("force", &LineEstimate::force)
+        .def_readonly("displacement", &LineEstimate::displacement)
+        .def_readonly("H", &LineEstimate::H)
+        .def_readonly("k", &LineEstimate::k)
+        .def_readonly("c", &LineEstimate::c)
+        .def_readonly("k_std", &LineEstimate::k_std)
+        .def_readonly("c_std", &LineEstimate::c_std)
+        .def_readonly("k_smooth", &LineEstimate::k_smooth)
+        .def_readonly("c_smooth", &LineEstimate::c_smooth)
+        .def_readonly("unexcited_force", &LineEstimate::unexcited_force)
+        .def_readonly("unexcited_displacement", &LineEstimate::unexcited_displacement)
+        .def_readonly("periods", &LineEstimate::periods)
+        .def_readonly("blocks", &LineEstimate::blocks);
+
+    m.def("run_experiment", &run_experiment, py::arg("rig"), py::arg("pid"), py::arg("period_force"),
+          py::arg("settle_periods"), py::arg("periods"), py::arg("plan"), py::arg("seed"), py::arg("median_window"),
+          py::call_guard<py::gil_scoped_release>(),
+          "Simulates settle + periods of the repeated excitation and estimates, keeping no time series.");
+
+    m.def(
+        "identify",
+        [](const InputArray& force, const InputArray& displacement, Eigen::Index settle_periods, const LinePlan& plan,
+           double mass, double fs, int median_window) {
+            if (force.ndim() != 1 || displacement.ndim() != 1 || force.size() != displacement.size())
+                throw std::invalid_argument("force and displacement must be one-dimensional and of equal length");
+            py::gil_scoped_release release;
+            return identify(force.data(), displacement.data(), static_cast<Eigen::Index>(force.size()),
+                            settle_periods, plan, mass, fs, median_window);
+        },
+        py::arg("force"), py::arg("displacement"), py::arg("settle_periods"), py::arg("plan"), py::arg("mass"),
+        py::arg("fs"), py::arg("median_window"), "The estimator over recorded arrays (whole periods).");
+}

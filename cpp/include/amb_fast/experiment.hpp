@@ -1,0 +1,27 @@
+// The identification experiment of MODEL.md section 3: simulated (the loop streams its periods into
+// the estimator, no time series kept) or recorded (the same estimator over arrays).
+#pragma once
+
+#include <Eigen/Dense>
+#include <cstdint>
+
+#include "amb_fast/loop.hpp"
+#include "amb_fast/spectrum.hpp"
+
+namespace amb_fast {
+
+// Up to this many periods the variance comes from every period; beyond, from this many batch means.
+constexpr Eigen::Index max_variance_blocks = 32;
+Eigen::Index periods_per_block(Eigen::Index periods);
+
+// Repeats one period of excitation force (N, plan.period samples) for settle_periods, then records
+// `periods` more into the estimator.
+LineEstimate run_experiment(const Rig& rig, const Pid& pid, const Eigen::Ref<const Eigen::VectorXd>& period_force,
+                            Eigen::Index settle_periods, Eigen::Index periods, LinePlan plan, std::uint64_t seed,
+                            int median_window);
+
+// The estimator over a recording of n samples per channel (a whole number of periods after settling).
+LineEstimate identify(const double* force, const double* displacement, Eigen::Index n, Eigen::Index settle_periods,
+                      LinePlan plan, double mass, double fs, int median_window);
+
+}  // namespace amb_fast

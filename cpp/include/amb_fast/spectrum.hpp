@@ -1,0 +1,60 @@
+// Streaming period averaging, spectra at the excited lines, their period-to-period variance, and the
+// stiffness/damping estimate of MODEL.md section 3. Memory is O(period + lines), never O(record).
+#pragma once
+
+#include <Eigen/Dense>
+#include <complex>
+#include <unsupported/Eigen/FFT>
+#include <vector>
+
+namespace amb_fast {
+
+struct LinePlan {
+    Eigen::Index period = 0;                // samples per period L
+    std::vector<Eigen::Index> excited;      // harmonic numbers (DFT bins) of the excited lines, 1..L/2-1
+    std::vector<Eigen::Index> unexcited;    // harmonic numbers at which to report levels
+    Eigen::Index periods_per_block = 1;     // > 1 only for long records: variance from batch means
+    void validate() const;
+};
+
+struct LineEstimate {
+    Eigen::VectorXcd force;         // N, period-averaged complex amplitude at each excited line
+    Eigen::VectorXcd displacement;  // m, likewise
+    Eigen::VectorXcd H;             // N/m, dynamic stiffness F/Y
+    Eigen::VectorXd k, c;           // N/m, N s/m: actual coefficients (paper eq. 9)
+    Eigen::VectorXd k_std, c_std;   // their standard errors, from the period-to-period variance
+    Eigen::VectorXd k_smooth, c_smooth;  // median filtered across lines
+    Eigen::VectorXd unexcited_force, unexcited_displacement;  // N, m: amplitudes at unexcited lines
+    Eigen::Index periods = 0;       // periods averaged
+    Eigen::Index blocks = 0;        // independent groups behind the variance (dof = blocks - 1)
+};
+
+class PeriodEstimator {
+public:
+    explicit PeriodEstimator(LinePlan plan);
+
+    // Adds one period of both channels (plan.period samples each). Throws std::invalid_argument
+    // naming the offending sample (first_sample: the record index of force[0]) if any is not finite.
+    void add_period(const double* force, const double* displacement, Eigen::Index first_sample = 0);
+    Eigen::Index periods() const { return periods_; }
+
+    // mass (kg) enters k = m w^2 + Re H; fs (Hz) sets the line frequencies; window is odd.
+    LineEstimate estimate(double mass, double fs, int median_window) const;
+
+private:
+    void close_block();
+
+    LinePlan plan_;
+    Eigen::FFT<double> fft_;
+    Eigen::VectorXd total_f_, total_y_, block_f_, block_y_;  // time-domain period sums
+    std::vector<std::complex<double>> spectrum_;
+    Eigen::Index periods_ = 0, in_block_ = 0, blocks_ = 0;
+    // Welford means and co-moments of the block spectra at the excited lines.
+    Eigen::VectorXcd mean_F_, mean_Y_, m_FYc_, m_FF_, m_YY_, m_FY_;
+    Eigen::VectorXd m_FFc_, m_YYc_;
+};
+
+// Odd-window running median across a sequence; the ends repeat the edge value ("nearest").
+Eigen::VectorXd median_filter(const Eigen::VectorXd& x, int window);
+
+}  // namespace amb_fast

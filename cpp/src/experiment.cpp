@@ -1,0 +1,48 @@
+#include "amb_fast/experiment.hpp"
+
+#include <algorithm>
+
+#include "amb_fast/errors.hpp"
+
+namespace amb_fast {
+
+Eigen::Index periods_per_block(Eigen::Index periods) {
+    return std::max<Eigen::Index>(1, periods / std::min(periods, max_variance_blocks));
+}
+
+LineEstimate run_experiment(const Rig& rig, const Pid& pid, const Eigen::Ref<const Eigen::VectorXd>& period_force,
+                            Eigen::Index settle_periods, Eigen::Index periods, LinePlan plan, std::uint64_t seed,
+                            int median_window) {
+    const Eigen::Index L = plan.period;
+    require(period_force.size() == L, "excitation length", period_force.size(), "one period of plan.period samples");
+    require_finite_samples("excitation", period_force.data(), L);
+    require(settle_periods >= 0, "settle_periods", settle_periods, ">= 0");
+    require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
+    plan.periods_per_block = periods_per_block(periods);
+    Loop loop(rig, pid, seed);
+    PeriodEstimator estimator(plan);
+    Eigen::VectorXd force(L), displacement(L), current(L);
+    for (Eigen::Index p = 0; p < settle_periods + periods; ++p) {
+        loop.run(period_force.data(), L, {force.data(), displacement.data(), current.data()});
+        if (p >= settle_periods) estimator.add_period(force.data(), displacement.data(), p * L);
+    }
+    return estimator.estimate(rig.mass, pid.fs, median_window);
+}
+
+LineEstimate identify(const double* force, const double* displacement, Eigen::Index n, Eigen::Index settle_periods,
+                      LinePlan plan, double mass, double fs, int median_window) {
+    const Eigen::Index L = plan.period;
+    require(L > 0 && n % L == 0, "recording length", n, "a whole number of periods");
+    require(settle_periods >= 0, "settle_periods", settle_periods, ">= 0");
+    const Eigen::Index periods = n / L - settle_periods;
+    require(periods >= 2, "periods after settling", periods, ">= 2 (standard errors need at least two)");
+    require_positive("mass", mass, "kg");
+    require_positive("fs", fs, "Hz");
+    plan.periods_per_block = periods_per_block(periods);
+    PeriodEstimator estimator(plan);
+    for (Eigen::Index p = settle_periods; p < settle_periods + periods; ++p)
+        estimator.add_period(force + p * L, displacement + p * L, p * L);
+    return estimator.estimate(mass, fs, median_window);
+}
+
+}  // namespace amb_fast

@@ -1,0 +1,146 @@
+#include "amb_fast/spectrum.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "amb_fast/errors.hpp"
+
+namespace amb_fast {
+
+namespace {
+constexpr double two_pi = 6.283185307179586;
+using cd = std::complex<double>;
+}  // namespace
+
+void LinePlan::validate() const {
+    require(period >= 4, "period", period, "at least 4 samples");
+    require(!excited.empty(), "lines", excited.size(), "at least one excited line");
+    require(periods_per_block >= 1, "periods_per_block", periods_per_block, ">= 1");
+    for (const auto* set : {&excited, &unexcited})
+        for (Eigen::Index b : *set)
+            require(b >= 1 && 2 * b < period, "line harmonic", b, "between 1 and below period/2 (Nyquist)");
+}
+
+PeriodEstimator::PeriodEstimator(LinePlan plan) : plan_(validated(plan)) {
+    const Eigen::Index L = plan_.period, n = static_cast<Eigen::Index>(plan_.excited.size());
+    fft_.SetFlag(Eigen::FFT<double>::HalfSpectrum);
+    spectrum_.resize(static_cast<std::size_t>(L));
+    for (auto* v : {&total_f_, &total_y_, &block_f_, &block_y_}) v->setZero(L);
+    for (auto* v : {&mean_F_, &mean_Y_, &m_FYc_, &m_FF_, &m_YY_, &m_FY_}) v->setZero(n);
+    m_FFc_.setZero(n);
+    m_YYc_.setZero(n);
+}
+
+void PeriodEstimator::add_period(const double* force, const double* displacement, Eigen::Index first_sample) {
+    const Eigen::Index L = plan_.period;
+    block_f_ += Eigen::Map<const Eigen::VectorXd>(force, L);
+    block_y_ += Eigen::Map<const Eigen::VectorXd>(displacement, L);
+    // Inf and NaN survive summation, so the sums reveal a bad sample without a test per sample.
+    if (!std::isfinite(block_f_.sum() + block_y_.sum())) {
+        require_finite_samples("force", force, L, first_sample);  // throws, naming the sample
+        require_finite_samples("displacement", displacement, L, first_sample);
+    }
+    ++periods_;
+    if (++in_block_ == plan_.periods_per_block) close_block();
+}
+
+void PeriodEstimator::close_block() {
+    // Welford update of the mean and co-moments of the block spectra (two channels, complex).
+    ++blocks_;
+    const double inv = 1.0 / static_cast<double>(plan_.periods_per_block);
+    Eigen::VectorXcd F(mean_F_.size()), Y(mean_Y_.size());
+    for (auto [block, total, out] : {std::tuple{&block_f_, &total_f_, &F}, std::tuple{&block_y_, &total_y_, &Y}}) {
+        *total += *block;
+        const Eigen::VectorXd mean = *block * inv;
+        fft_.fwd(spectrum_.data(), mean.data(), mean.size());
+        for (std::size_t j = 0; j < plan_.excited.size(); ++j) (*out)[j] = spectrum_[plan_.excited[j]];
+        block->setZero();
+    }
+    const double n = static_cast<double>(blocks_);
+    const Eigen::VectorXcd dF = F - mean_F_, dY = Y - mean_Y_;
+    mean_F_ += dF / n;
+    mean_Y_ += dY / n;
+    const Eigen::VectorXcd dF2 = F - mean_F_, dY2 = Y - mean_Y_;
+    m_FFc_ += (dF.array() * dF2.conjugate().array()).real().matrix();
+    m_YYc_ += (dY.array() * dY2.conjugate().array()).real().matrix();
+    m_FYc_ += (dF.array() * dY2.conjugate().array()).matrix();
+    m_FF_ += (dF.array() * dF2.array()).matrix();
+    m_YY_ += (dY.array() * dY2.array()).matrix();
+    m_FY_ += (dF.array() * dY2.array()).matrix();
+    in_block_ = 0;
+}
+
+LineEstimate PeriodEstimator::estimate(double mass, double fs, int median_window) const {
+    require(blocks_ >= 2, "periods", periods_, "enough for at least 2 independent periods (standard errors)");
+    require(median_window >= 1 && median_window % 2 == 1, "median_window", median_window, "an odd number >= 1");
+    const Eigen::Index L = plan_.period, n = static_cast<Eigen::Index>(plan_.excited.size());
+    LineEstimate e;
+    e.periods = periods_;
+    e.blocks = blocks_;
+
+    // Averaged spectra from the time-domain sums of every period (those not in a full block too),
+    // scaled to complex amplitudes: a sine of amplitude A reads |A|.
+    std::vector<cd> F_all(static_cast<std::size_t>(L)), Y_all(static_cast<std::size_t>(L));
+    Eigen::FFT<double> fft;
+    fft.SetFlag(Eigen::FFT<double>::HalfSpectrum);
+    const double scale = 2.0 / (static_cast<double>(L) * static_cast<double>(periods_));
+    const Eigen::VectorXd f_sum = total_f_ + block_f_, y_sum = total_y_ + block_y_;
+    fft.fwd(F_all.data(), f_sum.data(), L);
+    fft.fwd(Y_all.data(), y_sum.data(), L);
+    e.force.resize(n);
+    e.displacement.resize(n);
+    for (Eigen::Index j = 0; j < n; ++j) {
+        e.force[j] = scale * F_all[plan_.excited[j]];
+        e.displacement[j] = scale * Y_all[plan_.excited[j]];
+    }
+    e.H = e.force.cwiseQuotient(e.displacement);
+
+    // Covariances of the averaged spectra (FFT units, like the Welford sums): the batch-means
+    // variance of one period is G * var(block means); that of the mean of all periods, / periods.
+    const double G = static_cast<double>(plan_.periods_per_block);
+    const double to_mean = G / ((static_cast<double>(blocks_) - 1.0) * static_cast<double>(periods_));
+    e.k.resize(n);
+    e.c.resize(n);
+    e.k_std.resize(n);
+    e.c_std.resize(n);
+    for (Eigen::Index j = 0; j < n; ++j) {
+        const double w = two_pi * static_cast<double>(plan_.excited[j]) * fs / static_cast<double>(L);
+        const cd H = e.H[j], Y = mean_Y_[j];
+        // Linearised: dH = (dF - H dY) / Y. E|dH|^2 and E[dH^2] give the variances of Re and Im.
+        const double abs2 = (m_FFc_[j] + std::norm(H) * m_YYc_[j] - 2.0 * std::real(std::conj(H) * m_FYc_[j])) *
+                            to_mean / std::norm(Y);
+        const cd sq = (m_FF_[j] + H * H * m_YY_[j] - 2.0 * H * m_FY_[j]) * to_mean / (Y * Y);
+        e.k[j] = mass * w * w + H.real();
+        e.c[j] = H.imag() / w;
+        e.k_std[j] = std::sqrt(std::max(0.0, 0.5 * (abs2 + sq.real())));
+        e.c_std[j] = std::sqrt(std::max(0.0, 0.5 * (abs2 - sq.real()))) / w;
+    }
+    e.k_smooth = median_filter(e.k, median_window);
+    e.c_smooth = median_filter(e.c, median_window);
+
+    const Eigen::Index u = static_cast<Eigen::Index>(plan_.unexcited.size());
+    e.unexcited_force.resize(u);
+    e.unexcited_displacement.resize(u);
+    for (Eigen::Index j = 0; j < u; ++j) {
+        e.unexcited_force[j] = scale * std::abs(F_all[plan_.unexcited[j]]);
+        e.unexcited_displacement[j] = scale * std::abs(Y_all[plan_.unexcited[j]]);
+    }
+    return e;
+}
+
+Eigen::VectorXd median_filter(const Eigen::VectorXd& x, int window) {
+    const Eigen::Index n = x.size(), half = window / 2;
+    Eigen::VectorXd out(n);
+    std::vector<double> buf(static_cast<std::size_t>(window));
+    for (Eigen::Index i = 0; i < n; ++i) {
+        for (Eigen::Index j = -half; j <= half; ++j)
+            buf[static_cast<std::size_t>(j + half)] = x[std::clamp<Eigen::Index>(i + j, 0, n - 1)];
+        std::nth_element(buf.begin(), buf.begin() + half, buf.end());
+        out[i] = buf[static_cast<std::size_t>(half)];
+    }
+    return out;
+}
+
+}  // namespace amb_fast

@@ -1,0 +1,221 @@
+"""The identification experiment: simulated (run_experiment) or recorded (identify)."""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from . import _core
+from ._excitation import Multisine, period_samples
+from ._linear import require_stable, settle_periods_for
+from ._params import PID, Rig
+from ._validate import integer, real, require, seed_value, series
+
+
+@dataclass(frozen=True)
+class UnexcitedLines:
+    """Levels at the harmonics of f0 below the highest excited line that carry no excitation.
+
+    What shows there is noise plus non-linear distortion.
+
+    Attributes
+    ----------
+    freq : ndarray
+        Hz.
+    force : ndarray
+        Amplitude of the period-averaged force, N.
+    displacement : ndarray
+        Amplitude of the period-averaged displacement, m.
+    """
+
+    freq: np.ndarray
+    force: np.ndarray
+    displacement: np.ndarray
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """Frequency-domain estimate at the excited lines (MODEL.md section 3).
+
+    Attributes
+    ----------
+    freq : ndarray
+        Excited lines, Hz.
+    H : ndarray
+        Dynamic stiffness F/Y, complex, N/m.
+    receptance : ndarray
+        Y/F = 1/H, complex, m/N.
+    k, c : ndarray
+        Actual stiffness (N/m) and damping (N s/m), paper eq. 9: ``k = m w^2 + Re H``, ``c = Im H / w``.
+    k_smooth, c_smooth : ndarray
+        ``k`` and ``c`` median filtered across the lines (window ``median_window``; the ends repeat
+        the edge value).
+    k_std, c_std : ndarray
+        Standard errors of ``k`` and ``c`` (N/m, N s/m), from the period-to-period variance of the
+        spectra (first-order propagation through F/Y). They have ``blocks - 1`` degrees of freedom:
+        use Student's t, not 1.96, for an interval from few periods.
+    force, displacement : ndarray
+        Period-averaged complex amplitudes at the lines, N and m.
+    unexcited : UnexcitedLines
+        Levels at the unexcited harmonics.
+    periods : int
+        Periods averaged.
+    blocks : int
+        Independent groups behind the standard errors: every period up to 32 periods, else 32 batch
+        means of consecutive periods.
+    """
+
+    freq: np.ndarray
+    H: np.ndarray
+    receptance: np.ndarray
+    k: np.ndarray
+    c: np.ndarray
+    k_smooth: np.ndarray
+    c_smooth: np.ndarray
+    k_std: np.ndarray
+    c_std: np.ndarray
+    force: np.ndarray
+    displacement: np.ndarray
+    unexcited: UnexcitedLines
+    periods: int
+    blocks: int
+
+
+def _plan(harmonics: np.ndarray, period: int) -> tuple[_core.LinePlan, np.ndarray]:
+    unexcited = np.setdiff1d(np.arange(1, harmonics.max() + 1), harmonics)
+    return _core.LinePlan(period=period, excited=harmonics.tolist(), unexcited=unexcited.tolist()), unexcited
+
+
+def _estimate(raw: _core.LineEstimate, harmonics: np.ndarray, unexcited: np.ndarray, f0: float) -> Estimate:
+    return Estimate(
+        freq=harmonics * f0,
+        H=raw.H,
+        receptance=1.0 / raw.H,
+        k=raw.k,
+        c=raw.c,
+        k_smooth=raw.k_smooth,
+        c_smooth=raw.c_smooth,
+        k_std=raw.k_std,
+        c_std=raw.c_std,
+        force=raw.force,
+        displacement=raw.displacement,
+        unexcited=UnexcitedLines(unexcited * f0, raw.unexcited_force, raw.unexcited_displacement),
+        periods=int(raw.periods),
+        blocks=int(raw.blocks),
+    )
+
+
+def _window(median_window: int) -> int:
+    window = integer("median_window", median_window, 1)
+    require(window % 2 == 1, "median_window", median_window, "odd")
+    return window
+
+
+def run_experiment(
+    rig: Rig,
+    pid: PID,
+    excitation: Multisine,
+    *,
+    periods: int = 10,
+    settle_periods: int | None = None,
+    seed: int | None = None,
+    median_window: int = 5,
+) -> Estimate:
+    """Simulate the SPHS experiment and estimate k(f), c(f), in one C++ call that keeps no time series.
+
+    The excitation period is repeated for ``settle_periods``, then ``periods`` more are recorded,
+    averaged and transformed. ``settle_periods=None`` takes enough for the slowest pole ``z_max`` of
+    the linearised closed loop to decay below 1e-9: ``ceil(ln 1e-9 / ln |z_max| / period) + 1``.
+    ``seed`` fixes the measurement noise. Raises :class:`UnstableLoopError` before simulating a loop
+    with a pole on or outside the unit circle.
+    """
+    require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
+    require(excitation.fs == pid.fs, "excitation.fs", excitation.fs, f"equal to pid.fs ({pid.fs} Hz)")
+    periods = integer("periods", periods, 2)
+    window = _window(median_window)
+    period = excitation.period_samples
+    require_stable(rig, pid)
+    if settle_periods is None:
+        settle_periods = settle_periods_for(rig, pid, period)
+    settle_periods = integer("settle_periods", settle_periods, 0)
+    harmonics = excitation.harmonics
+    plan, unexcited = _plan(harmonics, period)
+    raw = _core.run_experiment(
+        rig._to_core(), pid._to_core(), excitation.samples, settle_periods, periods, plan, seed_value(seed), window
+    )
+    return _estimate(raw, harmonics, unexcited, excitation.f0)
+
+
+def identify(
+    force: ArrayLike,
+    displacement: ArrayLike,
+    *,
+    fs: float,
+    f0: float,
+    mass: float,
+    f_max: float | None = None,
+    lines: ArrayLike | None = None,
+    settle_periods: int = 0,
+    median_window: int = 5,
+) -> Estimate:
+    """Estimate k(f), c(f) from a recording of force (N) and displacement (m) sampled at ``fs`` (Hz).
+
+    The same C++ estimator as :func:`run_experiment`. The record after ``settle_periods`` must hold at
+    least two periods of ``fs/f0`` samples; trailing samples short of a whole period are dropped with
+    a warning. ``mass`` (kg) is the known system mass of paper eq. 9.
+
+    Excited lines: ``lines`` (Hz, multiples of f0), else every harmonic of ``f0`` up to ``f_max``; with
+    neither given, the harmonics whose period-averaged force amplitude exceeds 1e-3 of the largest.
+    """
+    force, displacement = series("force", force), series("displacement", displacement)
+    require(force.size == displacement.size, "displacement length", displacement.size, f"{force.size} like force")
+    fs = real("fs", fs, "Hz", positive=True)
+    f0 = real("f0", f0, "Hz", positive=True)
+    mass = real("mass", mass, "kg", positive=True)
+    window = _window(median_window)
+    settle_periods = integer("settle_periods", settle_periods, 0)
+    period = period_samples(fs, f0)
+    start = settle_periods * period
+    require(force.size >= start + period, "recording length", force.size,
+            f"at least settle_periods + 1 periods ({start + period} samples)")  # fmt: skip
+    whole = start + (force.size - start) // period * period
+    if whole < force.size:
+        warnings.warn(
+            f"recording is not a whole number of periods of {period} samples: dropped the last "
+            f"{force.size - whole} samples",
+            stacklevel=2,
+        )
+        force, displacement = force[:whole], displacement[:whole]
+    require((whole - start) // period >= 2, "periods after settling", (whole - start) // period,
+            ">= 2 (standard errors need at least two)")  # fmt: skip
+    harmonics = _lines(force[start:], period, f0, fs, f_max, lines)
+    plan, unexcited = _plan(harmonics, period)
+    raw = _core.identify(force, displacement, settle_periods, plan, mass, fs, window)
+    return _estimate(raw, harmonics, unexcited, f0)
+
+
+def _lines(force: np.ndarray, period: int, f0: float, fs: float, f_max: float | None, lines) -> np.ndarray:  # noqa: ANN001
+    top = period // 2 - 1 if period % 2 == 0 else period // 2  # highest harmonic below Nyquist
+    if f_max is not None:
+        real("f_max", f_max, "Hz", positive=True)
+        require(f0 <= f_max < fs / 2, "f_max", f_max, f"at least f0 ({f0} Hz) and below fs/2 ({fs / 2} Hz)")
+        top = int(np.floor(f_max / f0 + 1e-9))
+    if lines is not None:
+        freq = np.atleast_1d(np.asarray(lines, dtype=float))
+        harmonics = np.rint(freq / f0)
+        ok = freq.ndim == 1 and bool(np.all(np.isfinite(freq))) and bool(np.all(np.abs(harmonics * f0 - freq) < 1e-6 * f0))
+        require(ok, "lines", lines, "a 1-D array of multiples of f0 (Hz)")
+        require(bool(np.all((harmonics >= 1) & (harmonics <= top))), "lines", lines,
+                f"within the band f0..{top * f0} Hz")  # fmt: skip
+        return np.unique(harmonics).astype(np.int64)
+    if f_max is not None:
+        return np.arange(1, top + 1)
+    # Neither given: the lines the force actually excites (finite data assumed; the core checks).
+    if not np.all(np.isfinite(force)):
+        bad = int(np.flatnonzero(~np.isfinite(force))[0])
+        raise ValueError(f"force must be finite, got {force[bad]!r} at sample {bad}")
+    level = np.abs(np.fft.rfft(force.reshape(-1, period).mean(axis=0)))[1 : top + 1]
+    return np.flatnonzero(level > 1e-3 * level.max()) + 1
