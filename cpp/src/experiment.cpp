@@ -40,9 +40,15 @@ LineEstimate identify(const double* force, const double* displacement, Eigen::In
     require_positive("fs", fs, "Hz");
     plan.periods_per_block = periods_per_block(periods);
     PeriodEstimator estimator(plan);
-    for (Eigen::Index p = settle_periods; p < settle_periods + periods; ++p)
-        estimator.add_period(force + p * L, displacement + p * L, p * L);
-    return estimator.estimate(mass, fs, median_window);
+    try {
+        const Eigen::Index start = settle_periods * L;
+        estimator.add_periods(force + start, displacement + start, periods, start);
+        return estimator.estimate(mass, fs, median_window);
+    } catch (const NonFiniteSamples& bad) {  // name the exact sample
+        require_finite_samples("force", force + bad.first, bad.count, bad.first);
+        require_finite_samples("displacement", displacement + bad.first, bad.count, bad.first);
+        throw;
+    }
 }
 
 }  // namespace amb_fast

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include "amb_fast/errors.hpp"
 
@@ -33,31 +34,70 @@ PeriodEstimator::PeriodEstimator(LinePlan plan) : plan_(validated(plan)) {
     m_YYc_.setZero(n);
 }
 
-void PeriodEstimator::add_period(const double* force, const double* displacement, Eigen::Index first_sample) {
+NonFiniteSamples::NonFiniteSamples(Eigen::Index first_, Eigen::Index count_)
+    : std::invalid_argument("recording has a non-finite sample among samples " + std::to_string(first_) + " to " +
+                            std::to_string(first_ + count_ - 1)),
+      first(first_),
+      count(count_) {}
+
+namespace {
+// acc += the sum of m consecutive periods of length L at x, four at a time: a long record is read at
+// close to memory bandwidth instead of being bound by the accumulator's traffic.
+void accumulate(Eigen::VectorXd& acc, const double* x, Eigen::Index L, Eigen::Index m) {
+    using Period = Eigen::Map<const Eigen::VectorXd>;
+    Eigen::Index p = 0;
+    for (; p + 4 <= m; p += 4)
+        acc += (Period(x + p * L, L) + Period(x + (p + 1) * L, L)) + (Period(x + (p + 2) * L, L) + Period(x + (p + 3) * L, L));
+    for (; p < m; ++p) acc += Period(x + p * L, L);
+}
+}  // namespace
+
+void PeriodEstimator::add_periods(const double* force, const double* displacement, Eigen::Index count,
+                                  Eigen::Index first_sample) {
     const Eigen::Index L = plan_.period;
-    block_f_ += Eigen::Map<const Eigen::VectorXd>(force, L);
-    block_y_ += Eigen::Map<const Eigen::VectorXd>(displacement, L);
-    // Inf and NaN survive summation, so the sums reveal a bad sample without a test per sample.
-    if (!std::isfinite(block_f_.sum() + block_y_.sum())) {
-        require_finite_samples("force", force, L, first_sample);  // throws, naming the sample
-        require_finite_samples("displacement", displacement, L, first_sample);
+    while (count > 0) {
+        if (in_block_ == 0) block_first_ = first_sample;
+        const Eigen::Index m = std::min(count, plan_.periods_per_block - in_block_);
+        accumulate(block_f_, force, L, m);
+        accumulate(block_y_, displacement, L, m);
+        periods_ += m;
+        in_block_ += m;
+        if (in_block_ == plan_.periods_per_block) close_block();
+        force += m * L;
+        displacement += m * L;
+        first_sample += m * L;
+        count -= m;
     }
-    ++periods_;
-    if (++in_block_ == plan_.periods_per_block) close_block();
+}
+
+void PeriodEstimator::require_finite_block() const {
+    if (!std::isfinite(block_f_.sum() + block_y_.sum()))
+        throw NonFiniteSamples(block_first_, in_block_ * plan_.period);
+}
+
+void PeriodEstimator::line_spectrum(const Eigen::VectorXd& mean, Eigen::VectorXd& previous, Eigen::VectorXcd& lines) {
+    if (previous.size() == mean.size() && previous == mean) return;
+    fft_.fwd(spectrum_.data(), mean.data(), mean.size());
+    lines.resize(static_cast<Eigen::Index>(plan_.excited.size()));
+    for (std::size_t j = 0; j < plan_.excited.size(); ++j) lines[static_cast<Eigen::Index>(j)] = spectrum_[plan_.excited[j]];
+    previous = mean;
 }
 
 void PeriodEstimator::close_block() {
-    // Welford update of the mean and co-moments of the block spectra (two channels, complex).
+    require_finite_block();
     ++blocks_;
     const double inv = 1.0 / static_cast<double>(plan_.periods_per_block);
-    Eigen::VectorXcd F(mean_F_.size()), Y(mean_Y_.size());
-    for (auto [block, total, out] : {std::tuple{&block_f_, &total_f_, &F}, std::tuple{&block_y_, &total_y_, &Y}}) {
-        *total += *block;
-        const Eigen::VectorXd mean = *block * inv;
-        fft_.fwd(spectrum_.data(), mean.data(), mean.size());
-        for (std::size_t j = 0; j < plan_.excited.size(); ++j) (*out)[j] = spectrum_[plan_.excited[j]];
-        block->setZero();
-    }
+    line_spectrum(block_f_ * inv, previous_f_, lines_f_);
+    line_spectrum(block_y_ * inv, previous_y_, lines_y_);
+    total_f_ += block_f_;
+    total_y_ += block_y_;
+    block_f_.setZero();
+    block_y_.setZero();
+    in_block_ = 0;
+
+    // Welford update of the mean and co-moments of the block spectra (two channels, complex).
+    const Eigen::VectorXcd& F = lines_f_;
+    const Eigen::VectorXcd& Y = lines_y_;
     const double n = static_cast<double>(blocks_);
     const Eigen::VectorXcd dF = F - mean_F_, dY = Y - mean_Y_;
     mean_F_ += dF / n;
@@ -69,13 +109,13 @@ void PeriodEstimator::close_block() {
     m_FF_ += (dF.array() * dF2.array()).matrix();
     m_YY_ += (dY.array() * dY2.array()).matrix();
     m_FY_ += (dF.array() * dY2.array()).matrix();
-    in_block_ = 0;
 }
 
 LineEstimate PeriodEstimator::estimate(double mass, double fs, int median_window) const {
     require(blocks_ >= 2, "periods", periods_, "enough for at least 2 independent periods (standard errors)");
     require(median_window >= 1 && median_window % 2 == 1, "median_window", median_window, "an odd number >= 1");
     const Eigen::Index L = plan_.period, n = static_cast<Eigen::Index>(plan_.excited.size());
+    require_finite_block();  // the periods that did not fill a last block
     LineEstimate e;
     e.periods = periods_;
     e.blocks = blocks_;

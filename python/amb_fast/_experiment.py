@@ -137,9 +137,9 @@ def run_experiment(
     periods = integer("periods", periods, 2)
     window = _window(median_window)
     period = excitation.period_samples
-    require_stable(rig, pid)
+    poles = require_stable(rig, pid)
     if settle_periods is None:
-        settle_periods = settle_periods_for(rig, pid, period)
+        settle_periods = settle_periods_for(poles, period)
     settle_periods = integer("settle_periods", settle_periods, 0)
     harmonics = excitation.harmonics
     plan, unexcited = _plan(harmonics, period)

@@ -157,9 +157,9 @@ def require_stable(rig: Rig, pid: PID) -> np.ndarray:
     return poles
 
 
-def settle_periods_for(rig: Rig, pid: PID, period_samples: int, decay: float = 1e-9) -> int:
-    """Periods of ``period_samples`` for the slowest closed-loop pole to decay below ``decay``, plus one."""
-    radius = float(np.max(np.abs(require_stable(rig, pid))))
+def settle_periods_for(poles: np.ndarray, period_samples: int, decay: float = 1e-9) -> int:
+    """Periods of ``period_samples`` for the slowest of the (stable) ``poles`` to decay below ``decay``, plus one."""
+    radius = float(np.max(np.abs(poles)))
     samples = 0.0 if radius == 0.0 else np.log(decay) / np.log(radius)
     return int(np.ceil(samples / period_samples)) + 1
 
