@@ -10,3 +10,4 @@ namespace py = pybind11;
 void bind_params(py::module_& m);
 void bind_loop(py::module_& m);
 void bind_spectrum(py::module_& m);
+void bind_sweep(py::module_& m);

@@ -5,4 +5,5 @@ PYBIND11_MODULE(_core, m) {
     bind_params(m);
     bind_loop(m);
     bind_spectrum(m);
+    bind_sweep(m);
 }

@@ -20,10 +20,7 @@ double Pid::filter_pole() const {
 }
 
 DigitalPid::DigitalPid(const Pid& pid)
-    : kp_(pid.kp),
-      ki_T_(pid.ki * pid.period()),
-      kd_gain_(pid.kd * (1.0 - pid.filter_pole()) / pid.period()),
-      a_(pid.filter_pole()),
+    : law_(pid),
       delay_line_(static_cast<std::size_t>(pid.delay), 0.0) {}
 
 }  // namespace amb_fast

@@ -6,10 +6,6 @@
 
 namespace amb_fast {
 
-Eigen::Index periods_per_block(Eigen::Index periods) {
-    return std::max<Eigen::Index>(1, periods / std::min(periods, max_variance_blocks));
-}
-
 LineEstimate run_experiment(const Rig& rig, const Pid& pid, const Eigen::Ref<const Eigen::VectorXd>& period_force,
                             Eigen::Index settle_periods, Eigen::Index periods, LinePlan plan, std::uint64_t seed,
                             int median_window) {

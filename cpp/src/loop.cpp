@@ -9,17 +9,6 @@
 
 namespace amb_fast {
 
-namespace {
-// The linear kernel skips the entries of Phi that the cascade structure makes zero; make sure they are.
-void check_cascade_pattern(const Propagator& P) {
-    using namespace state;
-    const double skipped = std::abs(P(i, y)) + std::abs(P(i, v)) + std::abs(P(i, i_f)) + std::abs(P(i_f, y)) +
-                           std::abs(P(i_f, v)) + P.block<4, 1>(0, ys).cwiseAbs().sum();
-    if (skipped > 1e-14 * P.cwiseAbs().maxCoeff())
-        throw std::logic_error("amb_fast: the one-sample map lost its cascade structure; please report this rig");
-}
-}  // namespace
-
 Loop::Loop(const Rig& rig, const Pid& pid, std::uint64_t seed)
     : rig_(validated(rig)),
       pid_(validated(pid)),
@@ -31,8 +20,7 @@ Loop::Loop(const Rig& rig, const Pid& pid, std::uint64_t seed)
       sensor_rng_(seed),
       force_rng_(seed ^ 0x9e3779b97f4a7c15ULL) {
     if (rig_.force_law == ForceLaw::linear) {
-        P_ = propagator(rig_, T_);
-        check_cascade_pattern(P_);
+        map_.emplace(propagator(rig_, T_));
     } else {
         const double h = T_ / rig_.substeps;
         P_ = propagator(rig_, h);
@@ -58,41 +46,23 @@ void Loop::run(const double* force, Eigen::Index n, Channels out) {
             has_amp_ ? run_linear<state::y, true>(force + start, m, part, noise)
                      : run_linear<state::y, false>(force + start, m, part, noise);
         for (Eigen::Index j = 0; j < m; ++j)
-            part.force[j] = force[start + j] + (rig_.force_noise > 0.0 ? rig_.force_noise * force_normal_(force_rng_) : 0.0);
+            part.force[j] = rig_.force_noise > 0.0 ? force[start + j] + rig_.force_noise * force_normal_(force_rng_)
+                                                   : force[start + j];
         k_ += m;
     }
 }
 
-// The lags form a cascade (amplifier -> eddy current -> platform -> sensor), so the exact one-sample
-// map Phi is block lower-triangular in that order: 16 of its 25 entries can be non-zero. The kernel
-// multiplies only those, in scalars that stay in registers; it is bound by the latency of the
-// sample-to-sample dependency chain, so independent terms are summed pairwise.
 template <int sensed, bool has_amp>
 void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise) {
     using namespace state;
-    const Propagator& P = P_;
-    const double yy = P(y, y), yv = P(y, v), yi = P(y, i), yf = P(y, i_f);
-    const double vy = P(v, y), vv = P(v, v), vi = P(v, i), vf = P(v, i_f);
-    const double ii = P(i, i), fi = P(i_f, i), ff = P(i_f, i_f);
-    const double sy = P(ys, y), sv = P(ys, v), si = P(ys, i), sf = P(ys, i_f), ss = P(ys, ys);
-    const double y_f = P(y, augmented::f), v_f = P(v, augmented::f), s_f = P(ys, augmented::f);
-    const double y_u = P(y, augmented::i_cmd), v_u = P(v, augmented::i_cmd), i_u = P(i, augmented::i_cmd);
-    const double f_u = P(i_f, augmented::i_cmd), s_u = P(ys, augmented::i_cmd);
+    const CascadeMap& map = *map_;
     double xy = x_[y], xv = x_[v], xi = x_[i], xf = x_[i_f], xs = x_[ys];
     for (Eigen::Index j = 0; j < n; ++j) {
         const double e = (sensed == ys ? xs : xy) + noise[j];
         const double u = pid_.step(e);
-        const double fj = force[j];
         out.displacement[j] = e;
         out.current[j] = has_amp ? xi : u;
-        const double ny = (yy * xy + yv * xv) + (yi * xi + yf * xf) + (y_f * fj + y_u * u);
-        const double nv = (vy * xy + vv * xv) + (vi * xi + vf * xf) + (v_f * fj + v_u * u);
-        const double ns = ((sy * xy + sv * xv) + (si * xi + sf * xf)) + (ss * xs + (s_f * fj + s_u * u));
-        xf = (fi * xi + ff * xf) + f_u * u;
-        xi = ii * xi + i_u * u;
-        xy = ny;
-        xv = nv;
-        xs = ns;
+        map.advance(xy, xv, xi, xf, xs, force[j], u);
     }
     x_ << xy, xv, xi, xf, xs;
     // Inf and NaN never turn finite again in a linear recursion, so one check per chunk suffices.

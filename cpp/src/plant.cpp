@@ -4,6 +4,8 @@
 
 #include "amb_fast/errors.hpp"
 
+#include <stdexcept>
+
 namespace amb_fast {
 
 namespace {
@@ -72,6 +74,21 @@ Propagator propagator(const Rig& rig, double h) {
     M.topLeftCorner<state::size, state::size>() = A * h;
     M.topRightCorner<state::size, 2>() = B * h;
     return M.exp();
+}
+
+CascadeMap::CascadeMap(const Propagator& P) {
+    using namespace state;
+    const double skipped = std::abs(P(i, y)) + std::abs(P(i, v)) + std::abs(P(i, i_f)) + std::abs(P(i_f, y)) +
+                           std::abs(P(i_f, v)) + P.block<4, 1>(0, ys).cwiseAbs().sum();
+    if (skipped > 1e-14 * P.cwiseAbs().maxCoeff())
+        throw std::logic_error("amb_fast: the one-sample map lost its cascade structure; please report this rig");
+    yy = P(y, y), yv = P(y, v), yi = P(y, i), yf = P(y, i_f);
+    vy = P(v, y), vv = P(v, v), vi = P(v, i), vf = P(v, i_f);
+    ii = P(i, i), fi = P(i_f, i), ff = P(i_f, i_f);
+    sy = P(ys, y), sv = P(ys, v), si = P(ys, i), sf = P(ys, i_f), ss = P(ys, ys);
+    y_f = P(y, augmented::f), v_f = P(v, augmented::f), s_f = P(ys, augmented::f);
+    y_u = P(y, augmented::i_cmd), v_u = P(v, augmented::i_cmd), i_u = P(i, augmented::i_cmd);
+    f_u = P(i_f, augmented::i_cmd), s_u = P(ys, augmented::i_cmd);
 }
 
 int force_current_index(const Rig& rig) {

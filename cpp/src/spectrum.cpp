@@ -15,6 +15,16 @@ constexpr double two_pi = 6.283185307179586;
 using cd = std::complex<double>;
 }  // namespace
 
+void real_fft(const double* x, Eigen::Index n, std::complex<double>* out) {
+    // One transform object per thread: its plans (twiddle tables) are made once per length.
+    thread_local Eigen::FFT<double> fft = [] {
+        Eigen::FFT<double> f;
+        f.SetFlag(Eigen::FFT<double>::HalfSpectrum);
+        return f;
+    }();
+    fft.fwd(out, x, n);
+}
+
 void LinePlan::validate() const {
     require(period >= 4, "period", period, "at least 4 samples");
     require(!excited.empty(), "lines", excited.size(), "at least one excited line");
@@ -26,9 +36,13 @@ void LinePlan::validate() const {
 
 PeriodEstimator::PeriodEstimator(LinePlan plan) : plan_(validated(plan)) {
     const Eigen::Index L = plan_.period, n = static_cast<Eigen::Index>(plan_.excited.size());
-    fft_.SetFlag(Eigen::FFT<double>::HalfSpectrum);
     spectrum_.resize(static_cast<std::size_t>(L));
-    for (auto* v : {&total_f_, &total_y_, &block_f_, &block_y_}) v->setZero(L);
+    bins_ = plan_.excited;
+    bins_.insert(bins_.end(), plan_.unexcited.begin(), plan_.unexcited.end());
+    const auto all = static_cast<Eigen::Index>(bins_.size());
+    sum_F_.setZero(all);
+    sum_Y_.setZero(all);
+    for (auto* v : {&block_f_, &block_y_}) v->setZero(L);
     for (auto* v : {&mean_F_, &mean_Y_, &m_FYc_, &m_FF_, &m_YY_, &m_FY_}) v->setZero(n);
     m_FFc_.setZero(n);
     m_YYc_.setZero(n);
@@ -77,9 +91,9 @@ void PeriodEstimator::require_finite_block() const {
 
 void PeriodEstimator::line_spectrum(const Eigen::VectorXd& mean, Eigen::VectorXd& previous, Eigen::VectorXcd& lines) {
     if (previous.size() == mean.size() && previous == mean) return;
-    fft_.fwd(spectrum_.data(), mean.data(), mean.size());
-    lines.resize(static_cast<Eigen::Index>(plan_.excited.size()));
-    for (std::size_t j = 0; j < plan_.excited.size(); ++j) lines[static_cast<Eigen::Index>(j)] = spectrum_[plan_.excited[j]];
+    real_fft(mean.data(), mean.size(), spectrum_.data());
+    lines.resize(static_cast<Eigen::Index>(bins_.size()));
+    for (std::size_t j = 0; j < bins_.size(); ++j) lines[static_cast<Eigen::Index>(j)] = spectrum_[bins_[j]];
     previous = mean;
 }
 
@@ -89,15 +103,17 @@ void PeriodEstimator::close_block() {
     const double inv = 1.0 / static_cast<double>(plan_.periods_per_block);
     line_spectrum(block_f_ * inv, previous_f_, lines_f_);
     line_spectrum(block_y_ * inv, previous_y_, lines_y_);
-    total_f_ += block_f_;
-    total_y_ += block_y_;
+    // The averaged spectra are the sum of the blocks' (the transform is linear): no extra FFT.
+    const double G = static_cast<double>(plan_.periods_per_block);
+    sum_F_ += G * lines_f_;
+    sum_Y_ += G * lines_y_;
     block_f_.setZero();
     block_y_.setZero();
     in_block_ = 0;
 
     // Welford update of the mean and co-moments of the block spectra (two channels, complex).
-    const Eigen::VectorXcd& F = lines_f_;
-    const Eigen::VectorXcd& Y = lines_y_;
+    const auto F = lines_f_.head(mean_F_.size());
+    const auto Y = lines_y_.head(mean_Y_.size());
     const double n = static_cast<double>(blocks_);
     const Eigen::VectorXcd dF = F - mean_F_, dY = Y - mean_Y_;
     mean_F_ += dF / n;
@@ -120,21 +136,19 @@ LineEstimate PeriodEstimator::estimate(double mass, double fs, int median_window
     e.periods = periods_;
     e.blocks = blocks_;
 
-    // Averaged spectra from the time-domain sums of every period (those not in a full block too),
-    // scaled to complex amplitudes: a sine of amplitude A reads |A|.
-    std::vector<cd> F_all(static_cast<std::size_t>(L)), Y_all(static_cast<std::size_t>(L));
-    Eigen::FFT<double> fft;
-    fft.SetFlag(Eigen::FFT<double>::HalfSpectrum);
-    const double scale = 2.0 / (static_cast<double>(L) * static_cast<double>(periods_));
-    const Eigen::VectorXd f_sum = total_f_ + block_f_, y_sum = total_y_ + block_y_;
-    fft.fwd(F_all.data(), f_sum.data(), L);
-    fft.fwd(Y_all.data(), y_sum.data(), L);
-    e.force.resize(n);
-    e.displacement.resize(n);
-    for (Eigen::Index j = 0; j < n; ++j) {
-        e.force[j] = scale * F_all[plan_.excited[j]];
-        e.displacement[j] = scale * Y_all[plan_.excited[j]];
+    // Averaged spectra of every period (those short of a last full block too), scaled to complex
+    // amplitudes: a sine of amplitude A reads |A|.
+    Eigen::VectorXcd F_all = sum_F_, Y_all = sum_Y_;
+    if (in_block_ > 0) {
+        std::vector<cd> spectrum(static_cast<std::size_t>(L));
+        for (auto [block, total] : {std::pair{&block_f_, &F_all}, std::pair{&block_y_, &Y_all}}) {
+            real_fft(block->data(), L, spectrum.data());
+            for (std::size_t j = 0; j < bins_.size(); ++j) (*total)[static_cast<Eigen::Index>(j)] += spectrum[bins_[j]];
+        }
     }
+    const double scale = 2.0 / (static_cast<double>(L) * static_cast<double>(periods_));
+    e.force = scale * F_all.head(n);
+    e.displacement = scale * Y_all.head(n);
     e.H = e.force.cwiseQuotient(e.displacement);
 
     // Covariances of the averaged spectra (FFT units, like the Welford sums): the batch-means
@@ -164,8 +178,8 @@ LineEstimate PeriodEstimator::estimate(double mass, double fs, int median_window
     e.unexcited_force.resize(u);
     e.unexcited_displacement.resize(u);
     for (Eigen::Index j = 0; j < u; ++j) {
-        e.unexcited_force[j] = scale * std::abs(F_all[plan_.unexcited[j]]);
-        e.unexcited_displacement[j] = scale * std::abs(Y_all[plan_.unexcited[j]]);
+        e.unexcited_force[j] = scale * std::abs(F_all[n + j]);
+        e.unexcited_displacement[j] = scale * std::abs(Y_all[n + j]);
     }
     return e;
 }

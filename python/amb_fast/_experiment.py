@@ -64,8 +64,8 @@ class Estimate:
     periods : int
         Periods averaged.
     blocks : int
-        Independent groups behind the standard errors: every period up to 32 periods, else 32 batch
-        means of consecutive periods.
+        Independent groups behind the standard errors: every period up to 63 periods, else batch
+        means of ``periods // 32`` consecutive periods (32 to 63 of them).
     """
 
     freq: np.ndarray

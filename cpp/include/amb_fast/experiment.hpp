@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cstdint>
 
 #include "amb_fast/loop.hpp"
@@ -10,9 +11,12 @@
 
 namespace amb_fast {
 
-// Up to this many periods the variance comes from every period; beyond, from this many batch means.
+// Up to 2 * 32 - 1 periods the variance comes from every period; beyond, from batch means of
+// floor(periods / 32) consecutive periods (32 to 63 of them): a long record costs few FFTs.
 constexpr Eigen::Index max_variance_blocks = 32;
-Eigen::Index periods_per_block(Eigen::Index periods);
+inline Eigen::Index periods_per_block(Eigen::Index periods) {
+    return std::max<Eigen::Index>(1, periods / max_variance_blocks);
+}
 
 // Repeats one period of excitation force (N, plan.period samples) for settle_periods, then records
 // `periods` more into the estimator.

@@ -3,6 +3,7 @@
 
 #include <Eigen/Dense>
 #include <cstdint>
+#include <optional>
 #include <random>
 
 #include "amb_fast/controller.hpp"
@@ -43,7 +44,8 @@ private:
     double T_;
     int sensed_;         // state read by the sensor: ys, or y itself
     bool has_amp_;       // coil current is a state, or the command itself
-    Propagator P_;       // over one sample (linear law) or one substep (non-linear law)
+    std::optional<CascadeMap> map_;  // linear law: the one-sample map
+    Propagator P_;       // non-linear law: over one substep
     Propagator P_half_;  // over half a substep (non-linear law)
     int drive_;          // augmented index of the force-producing current
     MagnetPair magnets_;

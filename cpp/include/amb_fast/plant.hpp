@@ -64,6 +64,29 @@ constexpr int f = state::size, i_cmd = state::size + 1, size = state::size + 2;
 using AugmentedVector = Eigen::Matrix<double, augmented::size, 1>;
 using Propagator = Eigen::Matrix<double, augmented::size, augmented::size>;
 
+// The exact one-sample map of the linear plant, written out. The lags form a cascade (amplifier ->
+// eddy current -> platform -> sensor), so Phi is block lower-triangular in that order: only 16 of
+// its 25 entries can be non-zero, and only those are multiplied. The loops that use it are bound by
+// the latency of the sample-to-sample chain, so independent terms are summed pairwise. Every loop
+// (single runs and batched sweeps) calls this one function, so all agree bit for bit.
+struct CascadeMap {
+    explicit CascadeMap(const Propagator& P);  // throws std::logic_error if P lost the structure
+
+    void advance(double& xy, double& xv, double& xi, double& xf, double& xs, double f, double u) const {
+        const double ny = (yy * xy + yv * xv) + (yi * xi + yf * xf) + (y_f * f + y_u * u);
+        const double nv = (vy * xy + vv * xv) + (vi * xi + vf * xf) + (v_f * f + v_u * u);
+        const double ns = ((sy * xy + sv * xv) + (si * xi + sf * xf)) + (ss * xs + (s_f * f + s_u * u));
+        xf = (fi * xi + ff * xf) + f_u * u;
+        xi = ii * xi + i_u * u;
+        xy = ny;
+        xv = nv;
+        xs = ns;
+    }
+
+    double yy, yv, yi, yf, vy, vv, vi, vf, ii, fi, ff, sy, sv, si, sf, ss;  // Phi
+    double y_f, v_f, s_f, y_u, v_u, i_u, f_u, s_u;                         // Gamma: force, command
+};
+
 // Linear(ised) continuous model x' = A x + B [f, i_cmd].
 void continuous_model(const Rig& rig, StateMatrix& A, InputMatrix& B);
 

@@ -61,8 +61,9 @@ private:
     void line_spectrum(const Eigen::VectorXd& mean, Eigen::VectorXd& previous, Eigen::VectorXcd& lines);
 
     LinePlan plan_;
-    Eigen::FFT<double> fft_;
-    Eigen::VectorXd total_f_, total_y_, block_f_, block_y_;  // time-domain period sums
+    std::vector<Eigen::Index> bins_;           // excited, then unexcited harmonics
+    Eigen::VectorXd block_f_, block_y_;        // time-domain sums of the open block's periods
+    Eigen::VectorXcd sum_F_, sum_Y_;           // spectra at bins_, summed over the closed blocks' periods
     std::vector<std::complex<double>> spectrum_;
     Eigen::Index periods_ = 0, in_block_ = 0, blocks_ = 0, block_first_ = 0;
     Eigen::VectorXd previous_f_, previous_y_;
@@ -71,6 +72,9 @@ private:
     Eigen::VectorXcd mean_F_, mean_Y_, m_FYc_, m_FF_, m_YY_, m_FY_;
     Eigen::VectorXd m_FFc_, m_YYc_;
 };
+
+// Unscaled DFT bins 0..n/2 of n real samples.
+void real_fft(const double* x, Eigen::Index n, std::complex<double>* out);
 
 // Odd-window running median across a sequence; the ends repeat the edge value ("nearest").
 Eigen::VectorXd median_filter(const Eigen::VectorXd& x, int window);

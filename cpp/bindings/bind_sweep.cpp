@@ -1,0 +1,50 @@
+#include "amb_fast/batch.hpp"
+#include "bindings.hpp"
+
+using namespace amb_fast;
+
+void bind_sweep(py::module_& m) {
+    py::enum_<PointStatus>(m, "PointStatus", "Outcome of one point of a sweep.")
+        .value("ok", PointStatus::ok)
+        .value("unstable", PointStatus::unstable)
+        .value("touchdown", PointStatus::touchdown)
+        .value("saturated", PointStatus::saturated);
+
+    py::class_<SweepEstimates>(m, "SweepEstimates", "Estimates of a sweep, one row per point (see amb_fast.sweep).")
+        .def_readonly("H", &SweepEstimates::H)
+        .def_readonly("force", &SweepEstimates::force)
+        .def_readonly("displacement", &SweepEstimates::displacement)
+        .def_readonly("k", &SweepEstimates::k)
+        .def_readonly("c", &SweepEstimates::c)
+        .def_readonly("k_std", &SweepEstimates::k_std)
+        .def_readonly("c_std", &SweepEstimates::c_std)
+        .def_readonly("k_smooth", &SweepEstimates::k_smooth)
+        .def_readonly("c_smooth", &SweepEstimates::c_smooth)
+        .def_readonly("unexcited_force", &SweepEstimates::unexcited_force)
+        .def_readonly("unexcited_displacement", &SweepEstimates::unexcited_displacement)
+        .def_readonly("status", &SweepEstimates::status)
+        .def_readonly("periods", &SweepEstimates::periods)
+        .def_readonly("blocks", &SweepEstimates::blocks);
+
+    m.def(
+        "run_sweep",
+        [](const Rig& rig, const Pid& base, const Eigen::Ref<const Eigen::VectorXd>& period_force,
+           const Eigen::Ref<const Eigen::VectorXd>& kp, const Eigen::Ref<const Eigen::VectorXd>& ki,
+           const Eigen::Ref<const Eigen::VectorXd>& kd,
+           const Eigen::Ref<const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>>& settle_periods,
+           const Eigen::Ref<const Eigen::Matrix<std::uint64_t, Eigen::Dynamic, 1>>& seeds, Eigen::Index periods,
+           const LinePlan& plan, int median_window, int workers) {
+            const Eigen::Index n = kp.size();
+            if (ki.size() != n || kd.size() != n || settle_periods.size() != n || seeds.size() != n)
+                throw std::invalid_argument("kp, ki, kd, settle_periods and seeds must have one entry per point");
+            std::vector<GainPoint> points(static_cast<std::size_t>(n));
+            for (Eigen::Index g = 0; g < n; ++g)
+                points[static_cast<std::size_t>(g)] = {kp[g], ki[g], kd[g], settle_periods[g], seeds[g]};
+            py::gil_scoped_release release;
+            return run_sweep(rig, base, period_force, points, periods, plan, median_window, workers);
+        },
+        py::arg("rig"), py::arg("pid"), py::arg("period_force"), py::arg("kp"), py::arg("ki"), py::arg("kd"),
+        py::arg("settle_periods"), py::arg("seeds"), py::arg("periods"), py::arg("plan"), py::arg("median_window"),
+        py::arg("workers"),
+        "Runs one experiment per gain set on `workers` threads (<= 0: all cores), GIL released.");
+}
