@@ -46,7 +46,7 @@ def main() -> None:
     pid = af.PID(kp=2000.0, ki=20000.0, kd=5.0, derivative_cutoff=1000.0)
     sphs = af.schroeder_multisine()
     period, periods = sphs.period_samples, 10
-    settle = af._linear.settle_periods_for(af.closed_loop_poles(rig, pid), period)
+    settle = int(af._linear.settle_periods_for(af._linear.spectral_radius(rig, pid), period)[0])
     lines = sphs.harmonics
 
     def numpy_experiment() -> None:

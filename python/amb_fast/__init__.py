@@ -30,6 +30,7 @@ from ._linear import (
 from ._params import PID, Rig
 from ._recording import Recording, load_recording, save_recording
 from ._simulate import Trace, simulate
+from ._sweep import SweepResult, load_sweep, sweep
 
 try:
     __version__ = version("amb_fast")
@@ -43,6 +44,7 @@ __all__ = [
     "Recording",
     "Rig",
     "StabilityMargin",
+    "SweepResult",
     "Trace",
     "UnexcitedLines",
     "UnstableLoopError",
@@ -52,6 +54,7 @@ __all__ = [
     "effective_coefficients",
     "identify",
     "load_recording",
+    "load_sweep",
     "predict",
     "run_experiment",
     "save_recording",
@@ -59,4 +62,5 @@ __all__ = [
     "sensitivity",
     "simulate",
     "stability_margin",
+    "sweep",
 ]

@@ -7,7 +7,7 @@ frequency response here is what a noise-free, settled, period-averaged experimen
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Union
 
 import numpy as np
@@ -157,11 +157,53 @@ def require_stable(rig: Rig, pid: PID) -> np.ndarray:
     return poles
 
 
-def settle_periods_for(poles: np.ndarray, period_samples: int, decay: float = 1e-9) -> int:
-    """Periods of ``period_samples`` for the slowest of the (stable) ``poles`` to decay below ``decay``, plus one."""
-    radius = float(np.max(np.abs(poles)))
-    samples = 0.0 if radius == 0.0 else np.log(decay) / np.log(radius)
-    return int(np.ceil(samples / period_samples)) + 1
+def _gain_arrays(pid: PID, kp: ArrayLike | None, ki: ArrayLike | None, kd: ArrayLike | None) -> np.ndarray:
+    """Gain sets as an (N, 3) array: given arrays broadcast together, the rest from ``pid``."""
+    given = {"kp": kp, "ki": ki, "kd": kd}
+    arrays = [np.asarray(pid.__dict__[n] if v is None else v, dtype=float) for n, v in given.items()]
+    for name, array in zip(given, arrays):
+        require(bool(np.all(np.isfinite(array))), name, array, "finite")
+    return np.stack(np.broadcast_arrays(*arrays), axis=-1).reshape(-1, 3)
+
+
+def spectral_radius(
+    rig: Rig, pid: PID, *, kp: ArrayLike | None = None, ki: ArrayLike | None = None, kd: ArrayLike | None = None
+) -> np.ndarray:
+    """Largest |z| of the closed-loop poles for many gain sets at once (the rest of ``pid`` fixed).
+
+    The closed-loop matrix is affine in (kp, ki, kd) for a given set of controller states, so it is
+    assembled from four matrices per set, and the eigenvalues of the whole stack come in one call.
+    Returns one radius per gain set (stable: < 1), in the broadcast shape of the gains, flattened.
+    """
+    gains = _gain_arrays(pid, kp, ki, kd)
+    radius = np.empty(len(gains))
+    # Which controller states exist (integral without ki = 0, derivative without kd = 0) changes
+    # the matrix size: one stack per pattern.
+    pattern = (gains[:, 1] != 0) * 1 + (gains[:, 2] != 0) * 2
+    for code in np.unique(pattern):
+        rows = np.flatnonzero(pattern == code)
+        ki0, kd0 = float(code & 1), float(code >> 1)
+
+        def at(p: float, i: float, d: float) -> np.ndarray:
+            return closed_loop(rig, replace(pid, kp=p, ki=i, kd=d))[0]
+
+        base = at(0.0, ki0, kd0)
+        slopes = [at(1.0, ki0, kd0) - base]
+        slopes.append(at(0.0, 2.0, kd0) - base if ki0 else np.zeros_like(base))
+        slopes.append(at(0.0, ki0, 2.0) - base if kd0 else np.zeros_like(base))
+        g = gains[rows] - np.array([0.0, ki0, kd0])
+        stack = base + np.einsum("nk,kij->nij", g, np.array(slopes))
+        radius[rows] = np.max(np.abs(np.linalg.eigvals(stack)), axis=-1)
+    return radius
+
+
+def settle_periods_for(radius: np.ndarray, period_samples: int, decay: float = 1e-9) -> np.ndarray:
+    """Periods of ``period_samples`` for poles of the given spectral ``radius`` (< 1) to decay below
+    ``decay``: ``ceil(ln(decay) / ln(radius) / period_samples) + 1``."""
+    radius = np.asarray(radius, dtype=float)
+    with np.errstate(divide="ignore"):
+        samples = np.where(radius > 0, np.log(decay) / np.log(np.where(radius > 0, radius, 0.5)), 0.0)
+    return np.ceil(samples / period_samples).astype(np.int64) + 1
 
 
 def _frequencies(freq: ArrayLike, fs: float | None = None) -> np.ndarray:
@@ -180,16 +222,51 @@ def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, z: np.ndarray) -> np.
     return np.einsum("on,fni->oif", C, X)
 
 
-def predict(rig: Rig, pid: PID, freq: ArrayLike) -> np.ndarray:
+def predict(
+    rig: Rig,
+    pid: PID,
+    freq: ArrayLike,
+    *,
+    kp: ArrayLike | None = None,
+    ki: ArrayLike | None = None,
+    kd: ArrayLike | None = None,
+) -> np.ndarray:
     """Exact receptance Y/F (m/N) of the linearised sampled-data loop at ``freq`` (Hz).
 
     Y is the sensor output and F the force, both sampled at ``pid.fs``, as an experiment records them;
     a settled, noise-free, period-averaged experiment reproduces it at every excited line to rounding.
+
+    Given ``kp``, ``ki`` or ``kd`` (arrays, broadcast together; the others from ``pid``), returns an
+    array of shape (gain sets, len(freq)) for all of them at once: the plant's two responses are
+    computed once and the controller, linear in its gains, is combined with them per gain set.
     """
     f = _frequencies(freq, pid.fs)
-    A, B, C, _ = closed_loop(rig, pid)
-    z = np.exp(2j * np.pi * f.ravel() / pid.fs)
-    return _response(A, B, C[:1], z)[0, 0].reshape(f.shape)
+    if kp is None and ki is None and kd is None:
+        A, B, C, _ = closed_loop(rig, pid)
+        z = np.exp(2j * np.pi * f.ravel() / pid.fs)
+        return _response(A, B, C[:1], z)[0, 0].reshape(f.shape)
+    gains = _gain_arrays(pid, kp, ki, kd)
+    Pf, Pi = _plant_responses(rig, pid.fs, f.ravel())
+    K = _controller_terms(pid, f.ravel())  # (3, freq): d G / d(kp, ki, kd), delay included
+    return Pf / (1.0 - Pi * (gains @ K))
+
+
+def _plant_responses(rig: Rig, fs: float, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sampled plant responses from force and from current command to the sensor, at ``f`` (Hz)."""
+    Phi, Gamma, states = discrete_plant(rig, fs)
+    sensor = np.zeros((1, len(states)))
+    sensor[0, states.index("ys") if "ys" in states else 0] = 1.0
+    response = _response(Phi, Gamma, sensor, np.exp(2j * np.pi * f / fs))[0]
+    return response[0], response[1]
+
+
+def _controller_terms(pid: PID, f: np.ndarray) -> np.ndarray:
+    """The digital G(z) z^-d is kp A(z) + ki B(z) + kd C(z): rows A, B, C at ``f`` (Hz)."""
+    T = 1.0 / pid.fs
+    zi = np.exp(-2j * np.pi * f * T)
+    a = np.exp(-2 * np.pi * pid.derivative_cutoff * T) if pid.derivative_cutoff is not None else 0.0
+    delay = zi**pid.delay
+    return np.array([np.ones_like(zi), T / (1 - zi), (1 - a) * (1 - zi) / (T * (1 - a * zi))]) * delay
 
 
 @dataclass(frozen=True)
@@ -269,15 +346,34 @@ def controller_response(controller: Controller, freq: np.ndarray, *, discrete: b
 
 
 def effective_coefficients(
-    rig: Rig, controller: Controller, freq: ArrayLike, *, discrete: bool = False
+    rig: Rig,
+    controller: Controller,
+    freq: ArrayLike,
+    *,
+    discrete: bool = False,
+    kp: ArrayLike | None = None,
+    ki: ArrayLike | None = None,
+    kd: ArrayLike | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Effective stiffness (N/m) and damping (N s/m) of paper eq. 5 at ``freq`` (Hz).
 
     ``k_eff = Kyy + Kiy Re G(jw)``, ``c_eff = Kiy Im G(jw) / w``, with ``controller`` a :class:`PID`
     (its theoretical G(s); ``discrete=True`` uses the digital G(z), delay included), a ``(num, den)``
     pair of polynomial coefficients in s (highest power first), or a callable of s = jw.
+
+    With a PID, ``kp``, ``ki``, ``kd`` arrays (broadcast together) give arrays of shape
+    (gain sets, len(freq)): G is linear in the gains, so each gain set costs one product.
     """
     f = _frequencies(freq)
+    if kp is not None or ki is not None or kd is not None:
+        require(isinstance(controller, PID), "controller", controller, "a PID when kp, ki or kd arrays are given")
+        gains = _gain_arrays(controller, kp, ki, kd)
+        unit = [replace(controller, kp=float(j == 0), ki=float(j == 1), kd=float(j == 2)) for j in range(3)]
+        terms = np.array([controller_response(u, f.ravel(), discrete=discrete) for u in unit])
+        if discrete:  # the digital kp term carries the delay too; controller_response includes it
+            pass
+        G = gains @ terms  # (gain sets, freq)
+        return rig.kyy + rig.kiy * G.real, rig.kiy * G.imag / (2 * np.pi * f.ravel())
     G = controller_response(controller, f, discrete=discrete)
     bad = ~np.isfinite(G)
     if np.any(bad):

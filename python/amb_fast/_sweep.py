@@ -1,0 +1,339 @@
+"""Gain sweeps: many experiments in one batched C++ call, on threads or any executor."""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from collections.abc import Sequence
+from concurrent.futures import Executor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from . import _core
+from ._excitation import Multisine
+from ._experiment import _plan, _window
+from ._linear import settle_periods_for, spectral_radius
+from ._params import PID, Rig
+from ._validate import integer, require, seed_value
+
+SWEPT = ("kp", "ki", "kd")
+STATUS = ("ok", "unstable", "touchdown", "saturated")  # index = the core's PointStatus
+UNITS = {"kp": "A/m", "ki": "A/(m s)", "kd": "A s/m"}
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """Estimates of every point of a sweep, in grid order.
+
+    Attributes
+    ----------
+    points : dict of str to ndarray
+        Each swept gain's value at every point (A/m, A/(m s), A s/m).
+    axes : dict of str to ndarray
+        The values given for each swept gain; for ``grid="product"`` the grid's shape is their lengths
+        (C order: the last name varies fastest).
+    grid : {"product", "zip"}
+    freq : ndarray
+        Excited lines, Hz.
+    H, k, c, k_smooth, c_smooth, k_std, c_std : ndarray
+        Shape (points, lines), as in :class:`Estimate` (N/m, N/m, N s/m, ...). NaN where status is not ok.
+    status : ndarray of str
+        "ok"; "unstable" (a linearised pole on or outside the unit circle, found before simulating);
+        "touchdown" (non-linear run reached the air gap); "saturated" (reserved: no saturation model yet).
+    settle_periods, seeds : ndarray
+        What each point ran with: ``run_experiment(rig, pid_i, excitation, periods=periods,
+        seed=int(seeds[i]))`` reproduces point i bit for bit.
+    unexcited_freq : ndarray
+        Unexcited harmonics, Hz; ``unexcited_displacement`` (points, lines) their levels, m.
+    periods, blocks : int
+        Periods averaged per point; independent groups behind the standard errors.
+    """
+
+    points: dict[str, np.ndarray]
+    axes: dict[str, np.ndarray]
+    grid: str
+    freq: np.ndarray
+    H: np.ndarray
+    k: np.ndarray
+    c: np.ndarray
+    k_smooth: np.ndarray
+    c_smooth: np.ndarray
+    k_std: np.ndarray
+    c_std: np.ndarray
+    status: np.ndarray
+    settle_periods: np.ndarray
+    seeds: np.ndarray
+    unexcited_freq: np.ndarray
+    unexcited_displacement: np.ndarray
+    periods: int
+    blocks: int
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Grid shape: one axis per swept gain for product grids, else (points,)."""
+        if self.grid == "product":
+            return tuple(len(v) for v in self.axes.values())
+        return (len(self.status),)
+
+    def to_xarray(self):  # noqa: ANN201 - xarray is optional
+        """An ``xarray.Dataset`` with one dimension per swept gain (product grids) or ``point``, and ``freq``."""
+        try:
+            import xarray as xr
+        except ImportError as error:
+            raise ImportError("to_xarray needs xarray: pip install 'amb_fast[xarray]'") from error
+        if self.grid == "product":
+            dims = list(self.axes)
+            coords: dict[str, Any] = {name: (name, values, {"units": UNITS[name]}) for name, values in self.axes.items()}
+        else:
+            dims = ["point"]
+            coords = {name: ("point", values, {"units": UNITS[name]}) for name, values in self.points.items()}
+        coords["freq"] = ("freq", self.freq, {"units": "Hz"})
+        coords["unexcited_freq"] = ("unexcited_freq", self.unexcited_freq, {"units": "Hz"})
+        shape = self.shape
+
+        def var(values: np.ndarray, units: str, lines: str = "freq") -> tuple:
+            return ([*dims, lines], values.reshape(*shape, values.shape[-1]), {"units": units})
+
+        data = {
+            "H": var(self.H, "N/m"),
+            "k": var(self.k, "N/m"),
+            "c": var(self.c, "N s/m"),
+            "k_smooth": var(self.k_smooth, "N/m"),
+            "c_smooth": var(self.c_smooth, "N s/m"),
+            "k_std": var(self.k_std, "N/m"),
+            "c_std": var(self.c_std, "N s/m"),
+            "unexcited_displacement": var(self.unexcited_displacement, "m", "unexcited_freq"),
+            "status": (dims, self.status.reshape(shape)),
+            "settle_periods": (dims, self.settle_periods.reshape(shape)),
+            "seeds": (dims, self.seeds.reshape(shape)),
+        }
+        attrs = {"grid": self.grid, "periods": self.periods, "blocks": self.blocks, "meta": json.dumps(self.meta)}
+        return xr.Dataset(data, coords=coords, attrs=attrs)
+
+    def save(self, path: str | Path) -> None:
+        """Write to ``.nc`` (NetCDF via xarray and h5netcdf; H as real and imaginary parts) or ``.npz``."""
+        path = Path(path)
+        if path.suffix == ".nc":
+            ds = self.to_xarray()
+            ds["H_real"], ds["H_imag"] = ds.H.real, ds.H.imag
+            ds.drop_vars("H").assign(status=ds.status.astype(str)).to_netcdf(path, engine="h5netcdf")
+        elif path.suffix == ".npz":
+            arrays = {name: getattr(self, name) for name in _ARRAYS}
+            arrays |= {f"point_{k}": v for k, v in self.points.items()} | {f"axis_{k}": v for k, v in self.axes.items()}
+            header = {"grid": self.grid, "periods": self.periods, "blocks": self.blocks, "meta": self.meta}
+            np.savez_compressed(path, header=json.dumps(header), **arrays)
+        else:
+            raise ValueError(f"path must end in .nc or .npz, got {str(path)!r}")
+
+
+_ARRAYS = ("freq", "H", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std", "status", "settle_periods", "seeds",
+           "unexcited_freq", "unexcited_displacement")  # fmt: skip
+
+
+def load_sweep(path: str | Path) -> SweepResult:
+    """Read a sweep written by :meth:`SweepResult.save` (``.nc`` or ``.npz``)."""
+    path = Path(path)
+    require(path.is_file(), "path", str(path), "an existing file")
+    if path.suffix == ".npz":
+        with np.load(path, allow_pickle=False) as f:
+            header = json.loads(str(f["header"]))
+            arrays = {name: f[name] for name in _ARRAYS}
+            points = {k[6:]: f[k] for k in f.files if k.startswith("point_")}
+            axes = {k[5:]: f[k] for k in f.files if k.startswith("axis_")}
+        return SweepResult(points=points, axes=axes, **arrays, **header)
+    if path.suffix != ".nc":
+        raise ValueError(f"path must end in .nc or .npz, got {str(path)!r}")
+    import xarray as xr
+
+    with xr.open_dataset(path, engine="h5netcdf") as ds:
+        ds = ds.load()
+    grid = ds.attrs["grid"]
+    names = [n for n in SWEPT if n in ds.coords]
+    n_dims = len(names) if grid == "product" else 1
+
+    def rows(name: str) -> np.ndarray:
+        values = np.asarray(ds[name].values)
+        return values.reshape(-1, *values.shape[n_dims:])
+
+    if grid == "product":
+        axes = {n: np.asarray(ds[n].values) for n in names}
+        mesh = np.meshgrid(*axes.values(), indexing="ij")
+        points = {n: m.ravel() for n, m in zip(names, mesh)}
+    else:
+        points = {n: np.asarray(ds[n].values) for n in names}
+        axes = dict(points)
+    return SweepResult(
+        points=points,
+        axes=axes,
+        grid=grid,
+        freq=np.asarray(ds.freq.values),
+        H=rows("H_real") + 1j * rows("H_imag"),
+        k=rows("k"),
+        c=rows("c"),
+        k_smooth=rows("k_smooth"),
+        c_smooth=rows("c_smooth"),
+        k_std=rows("k_std"),
+        c_std=rows("c_std"),
+        status=rows("status").astype(str),
+        settle_periods=rows("settle_periods"),
+        seeds=rows("seeds").astype(np.uint64),
+        unexcited_freq=np.asarray(ds.unexcited_freq.values),
+        unexcited_displacement=rows("unexcited_displacement"),
+        periods=int(ds.attrs["periods"]),
+        blocks=int(ds.attrs["blocks"]),
+        meta=json.loads(ds.attrs["meta"]),
+    )
+
+
+def point_seeds(seed: int, count: int) -> np.ndarray:
+    """One 64-bit seed per point from a base seed (splitmix64 of base + index): the same point gets
+    the same noise however the sweep is split across workers."""
+    z = np.uint64(seed) + (np.arange(1, count + 1, dtype=np.uint64) * np.uint64(0x9E3779B97F4A7C15))
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+def _grid(pid: PID, values: dict[str, ArrayLike | None], grid: str) -> tuple[dict, dict]:
+    require(grid in ("product", "zip"), "grid", grid, "'product' or 'zip'")
+    axes = {}
+    for name, given in values.items():
+        if given is None:
+            continue
+        array = np.atleast_1d(np.asarray(given, dtype=float))
+        require(array.ndim == 1 and array.size > 0, name, given, "a non-empty 1-D sequence")
+        require(bool(np.all(np.isfinite(array))), name, given, f"finite ({UNITS[name]})")
+        axes[name] = array
+    require(bool(axes), "kp, ki, kd", None, "at least one of them given")
+    if grid == "product":
+        mesh = np.meshgrid(*axes.values(), indexing="ij")
+        points = {name: m.ravel() for name, m in zip(axes, mesh)}
+    else:
+        sizes = {name: a.size for name, a in axes.items()}
+        require(len(set(sizes.values())) == 1, "lengths", sizes, "equal for grid='zip'")
+        points = dict(axes)
+    return axes, points
+
+
+def _run_chunk(
+    rig: Rig, pid: PID, excitation: Multisine, gains: np.ndarray, settle: np.ndarray, seeds: np.ndarray,
+    periods: int, window: int, workers: int,
+) -> dict[str, np.ndarray]:  # fmt: skip
+    """One batched core call (a unit of work for an executor; picklable arguments, numpy results)."""
+    plan, _ = _plan(excitation.harmonics, excitation.period_samples)
+    out = _core.run_sweep(rig._to_core(), pid._to_core(), excitation.samples, gains[:, 0].copy(), gains[:, 1].copy(),
+                          gains[:, 2].copy(), settle, seeds, periods, plan, window, workers)  # fmt: skip
+    return {name: np.array(getattr(out, name)) for name in _CORE_FIELDS}
+
+
+_CORE_FIELDS = ("H", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std", "unexcited_displacement", "status")
+
+
+def _progress_bar(progress: bool | None, total: int):  # noqa: ANN202
+    if progress is None:
+        progress = sys.stderr.isatty()
+    if not progress:
+        return None
+    try:
+        from tqdm.auto import tqdm
+    except ImportError as error:
+        raise ImportError("progress=True needs tqdm: pip install 'amb_fast[progress]'") from error
+    return tqdm(total=total, unit="point", desc="sweep")
+
+
+def sweep(
+    rig: Rig,
+    pid: PID,
+    excitation: Multisine,
+    *,
+    kp: Sequence[float] | np.ndarray | None = None,
+    ki: Sequence[float] | np.ndarray | None = None,
+    kd: Sequence[float] | np.ndarray | None = None,
+    grid: Literal["product", "zip"] = "product",
+    periods: int = 10,
+    settle_periods: int | None = None,
+    workers: int | None = None,
+    executor: Executor | None = None,
+    progress: bool | None = None,
+    seed: int | None = None,
+    median_window: int = 5,
+    chunk_size: int | None = None,
+) -> SweepResult:
+    """Run the experiment of :func:`run_experiment` for many gain sets.
+
+    ``kp``, ``ki``, ``kd`` are sequences of values (A/m, A/(m s), A s/m); omitted ones stay at
+    ``pid``'s. ``grid="product"`` crosses them, ``"zip"`` pairs them. Points whose linearised loop
+    is unstable are flagged and not simulated; the rest run in a batched C++ core, ``workers``
+    threads per call (default: all cores), with the GIL released.
+
+    ``executor``: any :class:`concurrent.futures.Executor` (threads, processes, or a dask cluster's
+    ``client.get_executor()``); the grid is cut into chunks of ``chunk_size`` points, each run by the
+    batched core on a worker (one thread each unless ``workers`` is given), and the results come back
+    in grid order. ``progress``: a tqdm bar (default: when stderr is a terminal). ``seed`` fixes the
+    measurement noise; each point gets its own seed (see ``SweepResult.seeds``).
+    """
+    require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
+    require(excitation.fs == pid.fs, "excitation.fs", excitation.fs, f"equal to pid.fs ({pid.fs} Hz)")
+    axes, points = _grid(pid, {"kp": kp, "ki": ki, "kd": kd}, grid)
+    periods = integer("periods", periods, 2)
+    window = _window(median_window)
+    n = len(next(iter(points.values())))
+    gains = np.column_stack([points.get(name, np.full(n, getattr(pid, name))) for name in SWEPT])
+
+    radius = spectral_radius(rig, pid, kp=gains[:, 0], ki=gains[:, 1], kd=gains[:, 2])
+    stable = radius < 1.0
+    if settle_periods is None:
+        settle = np.where(stable, settle_periods_for(np.where(stable, radius, 0.0), excitation.period_samples), 0)
+    else:
+        settle = np.full(n, integer("settle_periods", settle_periods, 0), dtype=np.int64)
+    seeds = point_seeds(seed_value(seed), n)
+    status = np.where(stable, "ok", "unstable").astype("<U9")
+
+    plan, unexcited = _plan(excitation.harmonics, excitation.period_samples)
+    lines, gaps = len(excitation.harmonics), len(unexcited)
+    results = {name: np.full((n, lines), np.nan + 0j if name == "H" else np.nan) for name in _CORE_FIELDS[:-2]}
+    results["unexcited_displacement"] = np.full((n, gaps), np.nan)
+
+    todo = np.flatnonzero(stable)
+    threads = workers if workers is not None else (1 if executor is not None else (os.cpu_count() or 1))
+    threads = integer("workers", threads, 1)
+    size = chunk_size or max(64 * threads, int(np.ceil(todo.size / 64)))
+    chunks = [todo[i : i + size] for i in range(0, todo.size, size)]
+    args = lambda rows: (rig, pid, excitation, gains[rows], settle[rows], seeds[rows], periods, window, threads)  # noqa: E731
+    bar = _progress_bar(progress, int(todo.size))
+    try:
+        if executor is None:
+            outputs = (_run_chunk(*args(rows)) for rows in chunks)
+        else:
+            futures = [executor.submit(_run_chunk, *args(rows)) for rows in chunks]
+            outputs = (future.result() for future in futures)
+        for rows, out in zip(chunks, outputs):
+            for name in results:
+                results[name][rows] = out[name]
+            status[rows] = np.array(STATUS)[out["status"]]
+            if bar is not None:
+                bar.update(rows.size)
+    finally:
+        if bar is not None:
+            bar.close()
+
+    return SweepResult(
+        points=points,
+        axes=axes,
+        grid=grid,
+        freq=excitation.freq,
+        status=status,
+        settle_periods=settle,
+        seeds=seeds,
+        unexcited_freq=unexcited * excitation.f0,
+        periods=periods,
+        blocks=periods // max(1, periods // 32),
+        meta={"rig": rig.__dict__, "pid": pid.__dict__, "f0": excitation.f0, "fs": excitation.fs},
+        **results,
+    )

@@ -1,0 +1,136 @@
+"""Gain sweeps: bit-for-bit equal to single runs, on any number of workers and executors."""
+
+from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import amb_fast as af
+
+FIELDS = ("H", "k", "c", "k_std", "c_std", "k_smooth", "c_smooth", "unexcited_displacement")
+
+
+@pytest.fixture(scope="module")
+def setup():
+    rig = af.Rig(amp_bandwidth=1500.0, eddy_bandwidth=800.0, sensor_bandwidth=5000.0, sensor_noise=2e-8, force_noise=1e-3)
+    pid = af.PID(kp=2000.0, ki=20000.0, kd=5.0, derivative_cutoff=1000.0)
+    excitation = af.schroeder_multisine(lines="odd", f_max=100.0)
+    return rig, pid, excitation
+
+
+def same(a: af.SweepResult, b: af.SweepResult) -> None:
+    for name in FIELDS:
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    np.testing.assert_array_equal(a.status, b.status)
+
+
+def test_sweep_points_equal_single_runs_bit_for_bit(setup) -> None:
+    rig, pid, excitation = setup
+    result = af.sweep(rig, pid, excitation, kp=[500.0, 1800.0, 2400.0], kd=[0.0, 4.0, 6.0], seed=11, periods=4)
+    assert result.shape == (3, 3)
+    assert list(result.status[:3]) == ["unstable"] * 3  # kp = 500 A/m: negative net stiffness
+    for i, status in enumerate(result.status):  # flagged exactly where the loop's poles say so
+        point = replace(pid, kp=result.points["kp"][i], kd=result.points["kd"][i])
+        assert (status == "unstable") == (np.abs(af.closed_loop_poles(rig, point)).max() >= 1)
+    ok = np.flatnonzero(result.status == "ok")
+    assert ok.size >= 4
+    for i in ok:
+        point = replace(pid, kp=result.points["kp"][i], kd=result.points["kd"][i])
+        single = af.run_experiment(rig, point, excitation, periods=4, seed=int(result.seeds[i]))
+        for name in ("H", "k", "c", "k_std", "c_std", "k_smooth", "c_smooth"):
+            np.testing.assert_array_equal(getattr(result, name)[i], getattr(single, name), err_msg=name)
+        np.testing.assert_array_equal(result.unexcited_displacement[i], single.unexcited.displacement)
+    for i in np.flatnonzero(result.status == "unstable"):
+        assert np.all(np.isnan(result.k[i])) and np.all(np.isnan(result.H[i]))
+
+
+def test_workers_and_executors_change_nothing(setup) -> None:
+    rig, pid, excitation = setup
+    kwargs = dict(kp=np.linspace(1800, 2600, 7), ki=[0.0, 1e4, 3e4], seed=5, periods=3)
+    serial = af.sweep(rig, pid, excitation, workers=1, **kwargs)
+    same(serial, af.sweep(rig, pid, excitation, workers=2, **kwargs))
+    same(serial, af.sweep(rig, pid, excitation, workers=2, chunk_size=4, **kwargs))
+    with ThreadPoolExecutor(3) as pool:
+        same(serial, af.sweep(rig, pid, excitation, executor=pool, chunk_size=5, **kwargs))
+
+
+def test_dask_local_cluster_gives_the_same_sweep(setup) -> None:
+    distributed = pytest.importorskip("distributed")
+    rig, pid, excitation = setup
+    kwargs = dict(kp=np.linspace(1800, 2600, 6), kd=[4.0, 6.0], seed=9, periods=3)
+    serial = af.sweep(rig, pid, excitation, **kwargs)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            same(serial, af.sweep(rig, pid, excitation, executor=client.get_executor(), chunk_size=3, **kwargs))
+
+
+def test_zip_grid_and_validation(setup) -> None:
+    rig, pid, excitation = setup
+    result = af.sweep(rig, pid, excitation, kp=[2000.0, 2200.0], ki=[1e4, 2e4], grid="zip", periods=2)
+    np.testing.assert_array_equal(result.points["ki"], [1e4, 2e4])
+    assert result.shape == (2,)
+    with pytest.raises(ValueError, match="lengths must be equal"):
+        af.sweep(rig, pid, excitation, kp=[1.0, 2.0], ki=[1.0], grid="zip")
+    with pytest.raises(ValueError, match="kp must be finite"):
+        af.sweep(rig, pid, excitation, kp=[2000.0, np.nan])
+    with pytest.raises(ValueError, match="at least one of them"):
+        af.sweep(rig, pid, excitation)
+    with pytest.raises(ValueError, match="grid must be"):
+        af.sweep(rig, pid, excitation, kp=[2000.0], grid="cartesian")
+
+
+def test_touchdown_is_flagged_and_the_rest_is_intact() -> None:
+    rig = af.Rig(force_law="nonlinear", amp_bandwidth=1500.0)
+    pid = af.PID(kp=2000.0, ki=0.0, kd=5.0)
+    big = af.schroeder_multisine(rms=6.0, f_max=50.0)  # pushes the soft loop into the magnets
+    result = af.sweep(rig, pid, big, kp=[1300.0, 6000.0], periods=2, settle_periods=1)
+    assert list(result.status) == ["touchdown", "ok"]
+    assert np.all(np.isnan(result.k[0])) and np.all(np.isfinite(result.k[1]))
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".nc"])
+def test_save_load_round_trip_and_xarray(setup, tmp_path, suffix) -> None:
+    if suffix == ".nc":
+        pytest.importorskip("xarray")
+        pytest.importorskip("h5netcdf")
+    rig, pid, excitation = setup
+    result = af.sweep(rig, pid, excitation, kp=[1000.0, 2000.0, 2400.0], kd=[4.0, 6.0], seed=1, periods=2)
+    result.save(tmp_path / f"sweep{suffix}")
+    loaded = af.load_sweep(tmp_path / f"sweep{suffix}")
+    same(result, loaded)
+    for name in ("seeds", "settle_periods", "freq", "unexcited_freq"):
+        np.testing.assert_array_equal(getattr(loaded, name), getattr(result, name))
+    assert loaded.grid == "product" and loaded.meta == result.meta
+    for name in ("kp", "kd"):
+        np.testing.assert_array_equal(loaded.points[name], result.points[name])
+        np.testing.assert_array_equal(loaded.axes[name], result.axes[name])
+
+
+def test_to_xarray_dims_and_coordinates(setup) -> None:
+    pytest.importorskip("xarray")
+    rig, pid, excitation = setup
+    result = af.sweep(rig, pid, excitation, kp=[2000.0, 2400.0], kd=[4.0, 5.0, 6.0], periods=2)
+    ds = result.to_xarray()
+    assert ds.k.dims == ("kp", "kd", "freq")
+    np.testing.assert_array_equal(ds.kp, [2000.0, 2400.0])
+    np.testing.assert_array_equal(ds.freq, excitation.freq)
+    assert ds.k.attrs["units"] == "N/m"
+    # The grid point (kp=2400, kd=4) is row 3 of the flat result.
+    np.testing.assert_array_equal(ds.k.sel(kp=2400.0, kd=4.0), result.k[3])
+
+
+def test_vectorised_prediction_matches_one_by_one(setup) -> None:
+    rig, pid, excitation = setup
+    kp = np.array([1800.0, 2200.0, 2600.0])
+    batch = af.predict(rig, pid, excitation.freq, kp=kp, kd=[[4.0], [6.0]])  # broadcast: 2 x 3 gain sets
+    assert batch.shape == (6, excitation.freq.size)
+    for row, (d, p) in enumerate([(d, p) for d in (4.0, 6.0) for p in kp]):
+        single = af.predict(rig, replace(pid, kp=p, kd=d), excitation.freq)
+        np.testing.assert_allclose(batch[row], single, rtol=1e-11)
+    k, c = af.effective_coefficients(rig, pid, excitation.freq, ki=[0.0, 1e4], discrete=True)
+    k1, c1 = af.effective_coefficients(rig, replace(pid, ki=1e4), excitation.freq, discrete=True)
+    np.testing.assert_allclose(k[1], k1, rtol=1e-12)
+    np.testing.assert_allclose(c[1], c1, rtol=1e-11)
