@@ -303,7 +303,7 @@ def sweep(
     todo = np.flatnonzero(stable)
     threads = workers if workers is not None else (1 if executor is not None else (os.cpu_count() or 1))
     threads = integer("workers", threads, 1)
-    size = chunk_size or max(64 * threads, int(np.ceil(todo.size / 64)))
+    size = chunk_size or max(128 * threads, int(np.ceil(todo.size / 16)))  # few calls, some progress
     chunks = [todo[i : i + size] for i in range(0, todo.size, size)]
     args = lambda rows: (rig, pid, excitation, gains[rows], settle[rows], seeds[rows], periods, window, threads)  # noqa: E731
     bar = _progress_bar(progress, int(todo.size))

@@ -1,0 +1,131 @@
+"""Gain sweeps: throughput, thread scaling, vectorised prediction and memory, measured in one run.
+
+1. A 1,000-point sweep of the paper experiment (settle + 10 periods at 4 kHz, 200 lines, all lags):
+   experiments per second and the cost per simulated sample per gain set, against one
+   run_experiment and scipy.signal.lfilter on the loop's closed-loop transfer function.
+2. The same sweep on 1 and 2 worker threads.
+3. predict over 10^5 gain sets x 200 lines against a plain loop over gain sets calling predict.
+4. Peak memory of a 10^5-point sweep (10 Hz fundamental, 20 lines) against the size of its estimates.
+
+Medians of repeated runs (noisy 2-core machine). Prints ratios, writes JSON.
+
+    python bench/bench_sweep.py [--quick] [--out bench/results/bench_sweep.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import resource
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+from scipy import signal
+
+import amb_fast as af
+
+
+def median_seconds(run, repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        run()
+        times.append(time.perf_counter() - start)
+    return float(np.median(times))
+
+
+def reset_peak_rss() -> None:
+    """Linux: make the peak resident size (VmHWM) start again from the current size."""
+    try:
+        Path("/proc/self/clear_refs").write_text("5")
+    except OSError:
+        pass
+
+
+def peak_rss_bytes() -> int:
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024  # Linux reports KiB
+
+
+def rss_bytes() -> int:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) * 1024
+    return 0
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="short smoke run (CI)")
+    parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "bench_sweep.json")
+    args = parser.parse_args()
+    points, repeats, predict_sets, memory_points = (64, 1, 1_000, 2_000) if args.quick else (1_000, 5, 100_000, 100_000)
+
+    rig = af.Rig(amp_bandwidth=1500.0, eddy_bandwidth=800.0, sensor_bandwidth=5000.0)
+    pid = af.PID(kp=2000.0, ki=20000.0, kd=5.0, derivative_cutoff=1000.0)
+    sphs = af.schroeder_multisine()
+    kp = np.linspace(1800.0, 2600.0, points)  # all stable: every point is simulated
+    r = {}
+
+    # 1-2. Sweep throughput and scaling.
+    sweep = lambda workers: af.sweep(rig, pid, sphs, kp=kp, workers=workers, progress=False)  # noqa: E731
+    result = sweep(1)
+    samples = float(np.sum(result.settle_periods + result.periods) * sphs.period_samples)
+    r["sweep 1 worker s"] = median_seconds(lambda: sweep(1), repeats)
+    r["sweep 2 workers s"] = median_seconds(lambda: sweep(2), repeats)
+    single = median_seconds(lambda: af.run_experiment(rig, pid, sphs), 5 * repeats)
+    single_samples = (result.settle_periods[0] + result.periods) * sphs.period_samples
+    A, B, C, D = af.closed_loop(rig, pid)
+    b, a = signal.ss2tf(A, B, C[:1], D[:1])
+    force = np.random.default_rng(0).standard_normal(1_000_000)
+    lfilter = median_seconds(lambda: signal.lfilter(b[0], a, force), 5) / force.size
+
+    # 3. Vectorised prediction.
+    gains = np.linspace(1800.0, 2600.0, predict_sets)
+    r["predict vectorised s"] = median_seconds(lambda: af.predict(rig, pid, sphs.freq, kp=gains), repeats)
+    loop_sets = max(10, predict_sets // 1000)
+    loop = median_seconds(lambda: [af.predict(rig, replace(pid, kp=g), sphs.freq) for g in gains[:loop_sets]], repeats)
+    r["predict loop s (extrapolated)"] = loop * predict_sets / loop_sets
+
+    # 4. Memory of a large sweep: estimates only, never time series.
+    coarse = af.schroeder_multisine(f0=10.0, f_max=200.0)
+    reset_peak_rss()
+    before = rss_bytes()
+    big = af.sweep(rig, pid, coarse, kp=np.linspace(1800.0, 2600.0, memory_points), workers=2, progress=False)
+    grown = peak_rss_bytes() - before
+    estimates = sum(getattr(big, n).nbytes for n in ("H", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std"))
+
+    per_set_sample_1 = r["sweep 1 worker s"] / samples
+    ratios = {
+        "experiments per second (2 workers)": points / r["sweep 2 workers s"],
+        "ns per sample per gain set, 1 worker": per_set_sample_1 * 1e9,
+        "ns per sample per gain set, 2 workers": r["sweep 2 workers s"] / samples * 1e9,
+        "ns per sample, single run_experiment": single / single_samples * 1e9,
+        "ns per sample, lfilter": lfilter * 1e9,
+        "sweep (1 worker) per sample per set / lfilter (goal <= 1)": per_set_sample_1 / lfilter,
+        "scaling 1 -> 2 workers (goal >= 1.8)": r["sweep 1 worker s"] / r["sweep 2 workers s"],
+        "predict: gain sets x lines per second": predict_sets * sphs.freq.size / r["predict vectorised s"],
+        "predict: loop / vectorised": r["predict loop s (extrapolated)"] / r["predict vectorised s"],
+        "memory sweep: points": memory_points,
+        "memory sweep: peak RSS growth MB": grown / 1e6,
+        "memory sweep: estimates MB": estimates / 1e6,
+    }
+    for name, value in r.items():
+        print(f"{name:58s} {value:12.4f}")
+    for name, value in ratios.items():
+        print(f"{name:58s} {value:12.2f}")
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps({"machine": platform.platform(), "seconds": r, "ratios": ratios}, indent=2))
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
