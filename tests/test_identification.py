@@ -41,6 +41,22 @@ def test_noise_free_experiment_matches_exact_prediction(lagged_rig, sphs, delay,
     assert rel(est.c, H.imag / w) < 1e-9
 
 
+def test_mass_loading_and_ac_coupled_transducer_are_predicted_exactly(lagged_rig, pid, sphs) -> None:
+    rig = replace(lagged_rig, mass_loading=0.04, force_coupling_tau=1.5)
+    est = af.run_experiment(rig, pid, sphs)  # settles the transducer too: ~30 s of excitation
+    assert est.periods == 10
+    assert rel(est.receptance, af.predict(rig, pid, est.freq)) < 1e-9
+    # The extra moving mass appears in the actual stiffness as -dm w^2 (paper eq. 9 uses m alone).
+    loaded = af.predict(replace(lagged_rig, mass_loading=0.04), pid, sphs.freq)
+    plain = af.predict(lagged_rig, pid, sphs.freq)
+    w = 2 * np.pi * sphs.freq
+    np.testing.assert_allclose((1 / loaded - 1 / plain).real, -0.04 * w**2, rtol=2e-2)
+    # AC coupling leads the recorded force: Re H gains -Im H / (w tau) at the lowest lines.
+    coupled = af.predict(replace(lagged_rig, force_coupling_tau=1.5), pid, sphs.freq[:3])
+    H = 1 / plain[:3]
+    np.testing.assert_allclose((1 / coupled).real - H.real, -H.imag / (w[:3] * 1.5), rtol=0.05)
+
+
 def test_prediction_matches_transfer_function_composition(lagged_rig, pid) -> None:
     freq = np.linspace(0.5, 1999.0, 300)
     assert rel(af.predict(lagged_rig, pid, freq), reference.receptance(lagged_rig, pid, freq)) < 1e-11

@@ -15,7 +15,8 @@ FIELDS = ("H", "k", "c", "k_std", "c_std", "k_smooth", "c_smooth", "unexcited_di
 
 @pytest.fixture(scope="module")
 def setup():
-    rig = af.Rig(amp_bandwidth=1500.0, eddy_bandwidth=800.0, sensor_bandwidth=5000.0, sensor_noise=2e-8, force_noise=1e-3)
+    rig = af.Rig(amp_bandwidth=1500.0, eddy_bandwidth=800.0, sensor_bandwidth=5000.0, sensor_noise=2e-8,
+                 force_noise=1e-3, mass_loading=0.03, force_coupling_tau=0.5)  # fmt: skip
     pid = af.PID(kp=2000.0, ki=20000.0, kd=5.0, derivative_cutoff=1000.0)
     excitation = af.schroeder_multisine(lines="odd", f_max=100.0)
     return rig, pid, excitation

@@ -93,7 +93,8 @@ void run_linear_group(const Rig& rig, const Pid& base, const Eigen::VectorXd& pe
     std::vector<double> xy(size), xv(size), xi(size), xf(size), xs(size), integral(size), derivative(size), e_prev(size);
     std::vector<double> line(static_cast<std::size_t>(std::max<Eigen::Index>(d, 1)) * size);
     std::vector<double> displacement(static_cast<std::size_t>(L) * size), noise(displacement.size(), 0.0);
-    Eigen::VectorXd lane_y(L), lane_f(L);
+    Eigen::VectorXd lane_y(L), lane_f(L), recorded(L);
+    ForceTransducer transducer(rig, base.period());  // sees the same force in every lane
     Eigen::Index last = 0;
     estimators.reserve(size);
     for (Eigen::Index g = 0; g < lanes; ++g) {
@@ -123,12 +124,12 @@ void run_linear_group(const Rig& rig, const Pid& base, const Eigen::VectorXd& pe
                 step_lanes<sensed, false>(lanes_now, lanes, map, a, f);
             if (d > 0 && ++head == static_cast<std::size_t>(d)) head = 0;
         }
+        transducer.record(period_force.data(), L, recorded.data());
         for (Eigen::Index g = 0; g < lanes; ++g) {
             const bool recording = p >= points[g].settle_periods && p < points[g].settle_periods + periods;
+            lane_f = recorded;
             if (rig.force_noise > 0.0)  // drawn whether recorded or not, as a single run draws it
-                for (Eigen::Index j = 0; j < L; ++j) lane_f[j] = period_force[j] + rig.force_noise * force_normal[g](force_rng[g]);
-            else
-                lane_f = period_force;
+                for (Eigen::Index j = 0; j < L; ++j) lane_f[j] += rig.force_noise * force_normal[g](force_rng[g]);
             if (!recording) continue;
             for (Eigen::Index j = 0; j < L; ++j) lane_y[j] = displacement[static_cast<std::size_t>(j * lanes + g)];
             if (recording) estimators[g].add_period(lane_f.data(), lane_y.data(), p * L);

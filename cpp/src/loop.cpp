@@ -18,7 +18,8 @@ Loop::Loop(const Rig& rig, const Pid& pid, std::uint64_t seed)
       drive_(force_current_index(rig)),
       magnets_(rig),
       sensor_rng_(seed),
-      force_rng_(seed ^ 0x9e3779b97f4a7c15ULL) {
+      force_rng_(seed ^ 0x9e3779b97f4a7c15ULL),
+      transducer_(rig, pid.period()) {
     if (rig_.force_law == ForceLaw::linear) {
         map_.emplace(propagator(rig_, T_));
     } else {
@@ -45,9 +46,9 @@ void Loop::run(const double* force, Eigen::Index n, Channels out) {
         else
             has_amp_ ? run_linear<state::y, true>(force + start, m, part, noise)
                      : run_linear<state::y, false>(force + start, m, part, noise);
-        for (Eigen::Index j = 0; j < m; ++j)
-            part.force[j] = rig_.force_noise > 0.0 ? force[start + j] + rig_.force_noise * force_normal_(force_rng_)
-                                                   : force[start + j];
+        transducer_.record(force + start, m, part.force);
+        if (rig_.force_noise > 0.0)
+            for (Eigen::Index j = 0; j < m; ++j) part.force[j] += rig_.force_noise * force_normal_(force_rng_);
         k_ += m;
     }
 }
@@ -97,7 +98,7 @@ void Loop::advance_nonlinear(AugmentedVector& X) const {
     using state::v;
     using state::y;
     const double h = T_ / rig_.substeps;
-    const double inv_m = 1.0 / rig_.mass;
+    const double inv_m = 1.0 / rig_.moving_mass();
     const int d = drive_;
     const auto& E = P_;
     const auto& E2 = P_half_;

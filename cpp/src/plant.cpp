@@ -23,6 +23,8 @@ void Rig::validate() const {
     require(substeps >= 1, "substeps", substeps, "an integer >= 1");
     require(std::isfinite(sensor_noise) && sensor_noise >= 0.0, "sensor_noise", sensor_noise, "finite and >= 0 (m rms)");
     require(std::isfinite(force_noise) && force_noise >= 0.0, "force_noise", force_noise, "finite and >= 0 (N rms)");
+    require(std::isfinite(mass_loading) && mass_loading >= 0.0, "mass_loading", mass_loading, "finite and >= 0 (kg)");
+    if (force_coupling_tau) require_positive("force_coupling_tau", *force_coupling_tau, "s");
     if (force_law == ForceLaw::nonlinear)
         require(kyy < 0.0, "kyy", kyy, "< 0 for the non-linear force law of a biased magnet pair (N/m)");
 }
@@ -46,9 +48,10 @@ void continuous_model(const Rig& rig, StateMatrix& A, InputMatrix& B) {
     const int eddy = rig.eddy_bandwidth ? i_f : amp;
 
     A(y, v) = 1.0;
-    A(v, y) = -rig.kyy / rig.mass;
-    B(v, 0) = 1.0 / rig.mass;
-    feed(v, eddy, -rig.kiy / rig.mass);
+    const double m = rig.moving_mass();
+    A(v, y) = -rig.kyy / m;
+    B(v, 0) = 1.0 / m;
+    feed(v, eddy, -rig.kiy / m);
     if (rig.amp_bandwidth) {
         const double wa = two_pi * *rig.amp_bandwidth;
         A(i, i) = -wa;

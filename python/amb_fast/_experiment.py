@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike
 
 from . import _core
 from ._excitation import Multisine, period_samples
-from ._linear import require_stable, settle_periods_for, spectral_radius
+from ._linear import require_stable, settle_periods_for, settling_radius, spectral_radius
 from ._params import PID, Rig
 from ._validate import integer, real, require, seed_value, series
 
@@ -128,7 +128,8 @@ def run_experiment(
 
     The excitation period is repeated for ``settle_periods``, then ``periods`` more are recorded,
     averaged and transformed. ``settle_periods=None`` takes enough for the slowest pole ``z_max`` of
-    the linearised closed loop to decay below 1e-9: ``ceil(ln 1e-9 / ln |z_max| / period) + 1``.
+    the linearised closed loop (or the force transducer's AC coupling, if slower) to decay below
+    1e-9: ``ceil(ln 1e-9 / ln |z_max| / period) + 1``.
     ``seed`` fixes the measurement noise. Raises :class:`UnstableLoopError` before simulating a loop
     with a pole on or outside the unit circle.
     """
@@ -139,7 +140,7 @@ def run_experiment(
     period = excitation.period_samples
     require_stable(rig, pid)
     if settle_periods is None:  # the same rule as amb_fast.sweep, so a sweep point reruns bit for bit
-        settle_periods = int(settle_periods_for(spectral_radius(rig, pid), period)[0])
+        settle_periods = int(settle_periods_for(settling_radius(rig, pid, spectral_radius(rig, pid)), period)[0])
     settle_periods = integer("settle_periods", settle_periods, 0)
     harmonics = excitation.harmonics
     plan, unexcited = _plan(harmonics, period)

@@ -25,7 +25,8 @@ def plant_matrices(rig: Rig) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """Continuous ``A``, ``B`` (inputs: force N, current command A) over the active states.
 
     States, in order, are ``y, v`` and then whichever of ``i`` (amplifier), ``i_f`` (eddy current) and
-    ``ys`` (sensor) are switched on. The force law is linearised (``kyy``, ``kiy``).
+    ``ys`` (sensor) are switched on. The force law is linearised (``kyy``, ``kiy``); the moving mass is
+    ``mass + mass_loading``.
     """
     stages = (("i", rig.amp_bandwidth), ("i_f", rig.eddy_bandwidth), ("ys", rig.sensor_bandwidth))
     states = ["y", "v"] + [name for name, bandwidth in stages if bandwidth is not None]
@@ -41,9 +42,10 @@ def plant_matrices(rig: Rig) -> tuple[np.ndarray, np.ndarray, list[str]]:
     coil = "i" if "i" in states else "cmd"
     driving = "i_f" if "i_f" in states else coil
     term("y", "v", 1.0)
-    term("v", "y", -rig.kyy / rig.mass)
-    term("v", driving, -rig.kiy / rig.mass)
-    B[states.index("v"), 0] = 1.0 / rig.mass
+    m = rig.mass + rig.mass_loading
+    term("v", "y", -rig.kyy / m)
+    term("v", driving, -rig.kiy / m)
+    B[states.index("v"), 0] = 1.0 / m
     if "i" in states:
         wa = 2 * np.pi * rig.amp_bandwidth
         term("i", "i", -wa)
@@ -197,6 +199,14 @@ def spectral_radius(
     return radius
 
 
+def settling_radius(rig: Rig, pid: PID, radius: np.ndarray) -> np.ndarray:
+    """The slowest decay per sample of a run: the loop's spectral ``radius``, or the force transducer's
+    AC-coupling pole ``exp(-1/(fs tau))`` when that is slower (it settles on the applied force)."""
+    if rig.force_coupling_tau is None:
+        return np.asarray(radius, dtype=float)
+    return np.maximum(radius, np.exp(-1.0 / (pid.fs * rig.force_coupling_tau)))
+
+
 def settle_periods_for(radius: np.ndarray, period_samples: int, decay: float = 1e-9) -> np.ndarray:
     """Periods of ``period_samples`` for poles of the given spectral ``radius`` (< 1) to decay below
     ``decay``: ``ceil(ln(decay) / ln(radius) / period_samples) + 1``."""
@@ -233,22 +243,32 @@ def predict(
 ) -> np.ndarray:
     """Exact receptance Y/F (m/N) of the linearised sampled-data loop at ``freq`` (Hz).
 
-    Y is the sensor output and F the force, both sampled at ``pid.fs``, as an experiment records them;
-    a settled, noise-free, period-averaged experiment reproduces it at every excited line to rounding.
+    Y is the sensor output and F the recorded force (through the transducer's AC coupling, if any),
+    both sampled at ``pid.fs``, as an experiment records them; a settled, noise-free, period-averaged
+    experiment reproduces it at every excited line to rounding.
 
     Given ``kp``, ``ki`` or ``kd`` (arrays, broadcast together; the others from ``pid``), returns an
     array of shape (gain sets, len(freq)) for all of them at once: the plant's two responses are
     computed once and the controller, linear in its gains, is combined with them per gain set.
     """
     f = _frequencies(freq, pid.fs)
+    z = np.exp(2j * np.pi * f.ravel() / pid.fs)
     if kp is None and ki is None and kd is None:
         A, B, C, _ = closed_loop(rig, pid)
-        z = np.exp(2j * np.pi * f.ravel() / pid.fs)
-        return _response(A, B, C[:1], z)[0, 0].reshape(f.shape)
+        return (_response(A, B, C[:1], z)[0, 0] / transducer_response(rig, pid.fs, z)).reshape(f.shape)
     gains = _gain_arrays(pid, kp, ki, kd)
     Pf, Pi = _plant_responses(rig, pid.fs, f.ravel())
     K = _controller_terms(pid, f.ravel())  # (3, freq): d G / d(kp, ki, kd), delay included
-    return Pf / (1.0 - Pi * (gains @ K))
+    return Pf / (1.0 - Pi * (gains @ K)) / transducer_response(rig, pid.fs, z)
+
+
+def transducer_response(rig: Rig, fs: float, z: np.ndarray) -> np.ndarray:
+    """Recorded over applied force: (1 - z^-1) / (1 - a z^-1), a = exp(-1/(fs tau)), for an AC-coupled
+    transducer (exact for the zero-order-held force); 1 when DC coupled."""
+    if rig.force_coupling_tau is None:
+        return np.ones_like(z)
+    a = np.exp(-1.0 / (fs * rig.force_coupling_tau))
+    return (1 - 1 / z) / (1 - a / z)
 
 
 def _plant_responses(rig: Rig, fs: float, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -34,6 +34,13 @@ class Rig:
         White noise on the displacement sensor output, m rms (the controller sees it too).
     force_noise : float
         White noise on the recorded force (force transducer), N rms; the applied force is clean.
+    mass_loading : float
+        Mass moving with the platform beyond ``mass``, kg: the part of the force transducer and stinger
+        between the sensing element and the platform. The dynamics move ``mass + mass_loading``; the
+        estimate (paper eq. 9) uses the known ``mass``, so it shows up in k(w) as ``-mass_loading w^2``.
+    force_coupling_tau : float or None
+        Discharge time constant of the AC-coupled (piezoelectric) force transducer, s: a first-order
+        high-pass that leads the recorded force in phase at the lowest lines. ``None``: DC coupled.
     substeps : int
         Integrator steps per controller sample for the non-linear force law (integrating-factor RK4:
         the linear part is exact, the non-linear remainder is fourth order; 2 steps keep the relative
@@ -51,6 +58,8 @@ class Rig:
     substeps: int = 2
     sensor_noise: float = 0.0
     force_noise: float = 0.0
+    mass_loading: float = 0.0
+    force_coupling_tau: float | None = None
 
     def __post_init__(self) -> None:
         real("mass", self.mass, "kg", positive=True)
@@ -65,6 +74,8 @@ class Rig:
         integer("substeps", self.substeps, 1)
         require(real("sensor_noise", self.sensor_noise, "m rms") >= 0, "sensor_noise", self.sensor_noise, ">= 0 (m rms)")
         require(real("force_noise", self.force_noise, "N rms") >= 0, "force_noise", self.force_noise, ">= 0 (N rms)")
+        require(real("mass_loading", self.mass_loading, "kg") >= 0, "mass_loading", self.mass_loading, ">= 0 (kg)")
+        optional_positive("force_coupling_tau", self.force_coupling_tau, "s")
 
     @property
     def gap(self) -> float:
@@ -84,7 +95,14 @@ class Rig:
             substeps=self.substeps,
             sensor_noise=self.sensor_noise,
             force_noise=self.force_noise,
+            mass_loading=self.mass_loading,
+            force_coupling_tau=self.force_coupling_tau,
         )
+
+    @property
+    def moving_mass(self) -> float:
+        """Mass the dynamics move, kg: ``mass + mass_loading``."""
+        return self.mass + self.mass_loading
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike
 from . import _core
 from ._excitation import Multisine
 from ._experiment import _plan, _window
-from ._linear import settle_periods_for, spectral_radius
+from ._linear import settle_periods_for, settling_radius, spectral_radius
 from ._params import PID, Rig
 from ._validate import integer, require, seed_value
 
@@ -289,7 +289,8 @@ def sweep(
     radius = spectral_radius(rig, pid, kp=gains[:, 0], ki=gains[:, 1], kd=gains[:, 2])
     stable = radius < 1.0
     if settle_periods is None:
-        settle = np.where(stable, settle_periods_for(np.where(stable, radius, 0.0), excitation.period_samples), 0)
+        slowest = settling_radius(rig, pid, np.where(stable, radius, 0.0))
+        settle = np.where(stable, settle_periods_for(slowest, excitation.period_samples), 0)
     else:
         settle = np.full(n, integer("settle_periods", settle_periods, 0), dtype=np.int64)
     seeds = point_seeds(seed_value(seed), n)

@@ -62,7 +62,7 @@ def _rk4_sample(rig: Rig, states: list[str], x: np.ndarray, f: float, i_cmd: flo
         dx = A @ x + B @ np.array([f, i_cmd])
         coil = x[states.index("i")] if "i" in states else i_cmd
         driving = x[states.index("i_f")] if "i_f" in states else coil
-        dx[1] = (f + magnet_force(rig, x[0], driving)) / rig.mass
+        dx[1] = (f + magnet_force(rig, x[0], driving)) / (rig.mass + rig.mass_loading)
         return dx
 
     h = T / rig.substeps

@@ -2,6 +2,8 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <random>
@@ -10,6 +12,31 @@
 #include "amb_fast/plant.hpp"
 
 namespace amb_fast {
+
+// The force transducer: AC coupled (a first-order high-pass of time constant tau, exact for the
+// zero-order-held force: q[k+1] = a q[k] + (1 - a) f[k], recorded f[k] - q[k], a = exp(-T/tau)), or
+// DC coupled (records the force as it is).
+class ForceTransducer {
+public:
+    ForceTransducer(const Rig& rig, double T)
+        : coupled_(rig.force_coupling_tau.has_value()),
+          a_(coupled_ ? std::exp(-T / *rig.force_coupling_tau) : 0.0) {}
+
+    void record(const double* force, Eigen::Index n, double* recorded) {
+        if (!coupled_) {
+            std::copy(force, force + n, recorded);
+            return;
+        }
+        for (Eigen::Index j = 0; j < n; ++j) {
+            recorded[j] = force[j] - q_;
+            q_ = a_ * q_ + (1.0 - a_) * force[j];
+        }
+    }
+
+private:
+    bool coupled_;
+    double a_, q_ = 0.0;
+};
 
 // One output sample block of the recorded channels, all at fs.
 struct Channels {
@@ -55,6 +82,7 @@ private:
     std::mt19937_64 sensor_rng_, force_rng_;
     std::normal_distribution<double> sensor_normal_, force_normal_;
     Eigen::VectorXd sensor_noise_ = Eigen::VectorXd::Zero(chunk);
+    ForceTransducer transducer_;
 };
 
 // Runs the loop from rest on n force samples (N) and records the channels. Throws

@@ -22,9 +22,13 @@ struct Rig {
     int substeps = 2;              // integrator steps per sample for the non-linear force law
     double sensor_noise = 0.0;     // m rms, white, added to the sensor output (seen by the controller too)
     double force_noise = 0.0;      // N rms, white, added to the recorded force (not to the applied one)
+    double mass_loading = 0.0;     // kg moving with the platform beyond `mass` (transducer, stinger)
+    std::optional<double> force_coupling_tau;  // s, AC coupling of the piezo force transducer; empty = DC
 
     // Throws std::invalid_argument naming the parameter and the value.
     void validate() const;
+    // What the dynamics move: the known mass plus the mass loading (kg). Eq. 9 uses `mass` alone.
+    double moving_mass() const { return mass + mass_loading; }
     // Nominal air gap g = i0 Kiy / (-Kyy) (m) of the force law that linearises to kyy, kiy.
     double gap() const;
     // Force of the magnet pair on the platform (N) at displacement y (m) and control current i (A).
