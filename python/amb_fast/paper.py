@@ -1,0 +1,122 @@
+"""``amb-fast paper``: the paper's study on the virtual rig, written as figures, curves and a claims report."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from . import claims as claim_checks
+from ._study import GAINS, PaperStudy, paper_study
+
+FIGURES = {  # file -> what it shows (the paper's figure)
+    "fig4_effective.png": "effective k, c (Fig. 4)",
+    "fig5_actual.png": "actual k, c (Fig. 5)",
+    "fig6_ki.png": "Ki family (Fig. 6)",
+    "fig7_ki_zoom.png": "Ki family around the natural frequency (Fig. 7)",
+    "fig8_kd.png": "Kd family (Fig. 8)",
+    "fig9_kd_zoom.png": "Kd family around the natural frequency (Fig. 9)",
+    "fig10_kp.png": "Kp family (Fig. 10)",
+}
+
+
+def _say(progress: bool, text: str) -> None:
+    if progress:
+        print(text, file=sys.stderr, flush=True)
+
+
+def _write_csv(path: Path, columns: dict[str, np.ndarray]) -> None:
+    np.savetxt(path, np.column_stack(list(columns.values())), delimiter=",", header=",".join(columns), comments="",
+               fmt="%.10g")  # fmt: skip
+
+
+def write_curves(study: PaperStudy, out: Path) -> list[Path]:
+    """Every curve as CSV (units in the column names), and each gain family as NetCDF (or .npz without xarray)."""
+    e = study.estimate
+    written = [out / "effective.csv", out / "actual.csv"]
+    _write_csv(written[0], {"freq_Hz": study.freq, "k_eff_N_per_m": study.k_eff, "c_eff_Ns_per_m": study.c_eff})
+    _write_csv(written[1], {
+        "freq_Hz": e.freq, "k_N_per_m": e.k, "c_Ns_per_m": e.c, "k_smooth_N_per_m": e.k_smooth,
+        "c_smooth_Ns_per_m": e.c_smooth, "k_std_N_per_m": e.k_std, "c_std_Ns_per_m": e.c_std,
+        "receptance_abs_m_per_N": np.abs(e.receptance), "receptance_phase_rad": np.angle(e.receptance),
+    })  # fmt: skip
+    try:
+        import h5netcdf  # noqa: F401
+        import xarray  # noqa: F401
+
+        suffix = ".nc"
+    except ImportError:
+        suffix = ".npz"
+    for name, result in study.families.items():
+        rows = {f"{name}_{j}": result.points[name][j] for j in range(len(result.points[name]))}
+        columns = {"freq_Hz": result.freq}
+        for j, key in enumerate(rows):
+            columns |= {f"k_smooth_N_per_m@{name}={rows[key]:g}": result.k_smooth[j],
+                        f"c_smooth_Ns_per_m@{name}={rows[key]:g}": result.c_smooth[j],
+                        f"receptance_abs_m_per_N@{name}={rows[key]:g}": np.abs(1 / result.H[j])}  # fmt: skip
+        path = out / f"family_{name}.csv"
+        _write_csv(path, columns)
+        result.save(out / f"family_{name}{suffix}")
+        written += [path, out / f"family_{name}{suffix}"]
+    return written
+
+
+def write_figures(study: PaperStudy, out: Path) -> list[Path]:
+    from .plots import plot_actual, plot_effective, plot_family
+
+    fn = claim_checks.natural_frequency(study.freq, study.estimate.H)
+    zoom = (max(1.0, fn - 15.0), fn + 15.0)
+    figures = {
+        "fig4_effective.png": plot_effective(study),
+        "fig5_actual.png": plot_actual(study.estimate),
+        "fig6_ki.png": plot_family(study.families["ki"], "ki"),
+        "fig7_ki_zoom.png": plot_family(study.families["ki"], "ki", zoom=zoom),
+        "fig8_kd.png": plot_family(study.families["kd"], "kd"),
+        "fig9_kd_zoom.png": plot_family(study.families["kd"], "kd", zoom=zoom),
+        "fig10_kp.png": plot_family(study.families["kp"], "kp"),
+    }
+    import matplotlib.pyplot as plt
+
+    for name, fig in figures.items():
+        fig.savefig(out / name, dpi=110)
+        plt.close(fig)
+    return [out / name for name in figures]
+
+
+def report(study: PaperStudy, table: str) -> str:
+    rig, pid, ex = study.rig, study.pid, study.excitation
+    lags = ", ".join(f"{n.replace('_', ' ')} {getattr(rig, n):g} Hz" for n in ("amp_bandwidth", "eddy_bandwidth",
+                                                                              "sensor_bandwidth") if getattr(rig, n))  # fmt: skip
+    scales = ", ".join(f"{s:g}" for s in study.scales)
+    return f"""# Claims of the paper, checked on the virtual rig
+
+Rig: m = {rig.mass} kg (+ {rig.mass_loading} kg mass loading), Kyy = {rig.kyy} N/m, Kiy = {rig.kiy} N/A; {lags};
+force transducer AC coupled with tau = {rig.force_coupling_tau} s; noise {rig.sensor_noise} m rms (probe),
+{rig.force_noise} N rms (force); {rig.force_law} force law.
+Controller: kp = {pid.kp} A/m, ki = {pid.ki} A/(m s), kd = {pid.kd} A s/m, derivative filter {pid.derivative_cutoff} Hz,
+fs = {pid.fs} Hz, delay {pid.delay} samples.
+Experiment: Schroeder multisine {ex.freq[0]:g}-{ex.freq[-1]:g} Hz, f0 = {ex.f0:g} Hz, {np.sqrt(np.mean(ex.samples**2)):.3g} N rms,
+{study.estimate.periods} periods averaged, median filter over 5 lines. Gain families: each gain times {scales}.
+
+{table}"""
+
+
+def write_paper(out: Path, *, seed: int = 2026, progress: bool = True) -> list[claim_checks.Claim]:
+    """Run the study and write figures, curves, ``claims.md``; print the claims table."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    _say(progress, "[1/4] SPHS experiment on the paper rig, then the Ki, Kd and Kp families ...")
+    study = paper_study(seed=seed, progress=False)
+    _say(progress, f"[2/4] writing curves to {out} ...")
+    write_curves(study, out)
+    _say(progress, f"[3/4] drawing {len(FIGURES)} figures ...")
+    write_figures(study, out)
+    _say(progress, "[4/4] checking the paper's observations ...")
+    claims = study.claims()
+    table = claim_checks.markdown(claims)
+    (out / "claims.md").write_text(report(study, table))
+    print(table)
+    print(f"wrote {out}/: {', '.join(FIGURES)}, claims.md, effective.csv, actual.csv, "
+          + ", ".join(f"family_{g}.csv/.nc" for g in GAINS))  # fmt: skip
+    return claims
