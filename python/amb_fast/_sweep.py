@@ -157,9 +157,11 @@ def load_sweep(path: str | Path) -> SweepResult:
     names = [n for n in SWEPT if n in ds.coords]
     n_dims = len(names) if grid == "product" else 1
 
+    n_points = int(ds.status.size)
+
     def rows(name: str) -> np.ndarray:
         values = np.asarray(ds[name].values)
-        return values.reshape(-1, *values.shape[n_dims:])
+        return values.reshape(n_points, *values.shape[n_dims:])
 
     if grid == "product":
         axes = {n: np.asarray(ds[n].values) for n in names}
