@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike
 
 from . import _core
 from ._excitation import Multisine, period_samples
-from ._linear import require_stable, settle_periods_for, settling_radius, spectral_radius
+from ._linear import require_stable, settle_periods_for, settling_radius
 from ._params import PID, Rig
 from ._validate import integer, real, require, seed_value, series
 
@@ -138,9 +138,9 @@ def run_experiment(
     periods = integer("periods", periods, 2)
     window = _window(median_window)
     period = excitation.period_samples
-    require_stable(rig, pid)
+    poles = require_stable(rig, pid)
     if settle_periods is None:  # the same rule as amb_fast.sweep, so a sweep point reruns bit for bit
-        settle_periods = int(settle_periods_for(settling_radius(rig, pid, spectral_radius(rig, pid)), period)[0])
+        settle_periods = int(settle_periods_for(settling_radius(rig, pid, np.max(np.abs(poles))), period))
     settle_periods = integer("settle_periods", settle_periods, 0)
     harmonics = excitation.harmonics
     plan, unexcited = _plan(harmonics, period)

@@ -6,6 +6,7 @@ frequency response here is what a noise-free, settled, period-averaged experimen
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Union
@@ -146,8 +147,10 @@ def closed_loop_poles(rig: Rig, pid: PID) -> np.ndarray:
 
 
 def require_stable(rig: Rig, pid: PID) -> np.ndarray:
-    """The closed-loop poles, or :class:`UnstableLoopError` naming the unstable ones and the gains."""
-    poles = closed_loop_poles(rig, pid)
+    """The closed-loop poles (as :func:`spectral_radius` computes them), or :class:`UnstableLoopError`
+    naming the unstable ones and the gains."""
+    ((_, stack),) = _closed_loop_stacks(rig, pid, _gain_arrays(pid, None, None, None))
+    poles = np.linalg.eigvals(stack)[0]
     bad = poles[np.abs(poles) >= 1.0]
     if bad.size:
         shown = ", ".join(f"{p:.6g} (|z|={abs(p):.6g})" for p in bad[:4])
@@ -168,33 +171,47 @@ def _gain_arrays(pid: PID, kp: ArrayLike | None, ki: ArrayLike | None, kd: Array
     return np.stack(np.broadcast_arrays(*arrays), axis=-1).reshape(-1, 3)
 
 
+@functools.lru_cache(maxsize=64)
+def _affine_closed_loop(rig: Rig, pid: PID, with_integral: bool, with_derivative: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The closed-loop matrix is affine in (kp, ki, kd) for a given set of controller states:
+    ``A = base + kp S0 + (ki - ki0) S1 + (kd - kd0) S2`` with ki0, kd0 = 1 where the state exists.
+    ``pid``'s own gains do not matter here (callers pass them as zero, for the cache)."""
+    ki0, kd0 = float(with_integral), float(with_derivative)
+
+    def at(p: float, i: float, d: float) -> np.ndarray:
+        return closed_loop(rig, replace(pid, kp=p, ki=i, kd=d))[0]
+
+    base = at(0.0, ki0, kd0)
+    slopes = [at(1.0, ki0, kd0) - base]
+    slopes.append(at(0.0, 2.0, kd0) - base if with_integral else np.zeros_like(base))
+    slopes.append(at(0.0, ki0, 2.0) - base if with_derivative else np.zeros_like(base))
+    return base, np.array(slopes)
+
+
+def _closed_loop_stacks(rig: Rig, pid: PID, gains: np.ndarray):  # noqa: ANN202
+    """(rows, stack of closed-loop matrices) per pattern of controller states among the gain sets."""
+    structure = replace(pid, kp=0.0, ki=0.0, kd=0.0)
+    pattern = (gains[:, 1] != 0) * 1 + (gains[:, 2] != 0) * 2
+    for code in np.unique(pattern):
+        rows = np.flatnonzero(pattern == code)
+        base, slopes = _affine_closed_loop(rig, structure, bool(code & 1), bool(code >> 1))
+        offsets = gains[rows] - np.array([0.0, float(code & 1), float(code >> 1)])
+        yield rows, base + np.einsum("nk,kij->nij", offsets, slopes)
+
+
 def spectral_radius(
     rig: Rig, pid: PID, *, kp: ArrayLike | None = None, ki: ArrayLike | None = None, kd: ArrayLike | None = None
 ) -> np.ndarray:
     """Largest |z| of the closed-loop poles for many gain sets at once (the rest of ``pid`` fixed).
 
-    The closed-loop matrix is affine in (kp, ki, kd) for a given set of controller states, so it is
-    assembled from four matrices per set, and the eigenvalues of the whole stack come in one call.
-    Returns one radius per gain set (stable: < 1), in the broadcast shape of the gains, flattened.
+    The closed-loop matrix is affine in the gains, so each gain set's matrix is a combination of four
+    cached ones, and the eigenvalues of the whole stack come in one call. Returns one radius per gain
+    set (stable: < 1), in the broadcast shape of the gains, flattened. A single run and a sweep use
+    this same computation, so they choose the same settling time.
     """
     gains = _gain_arrays(pid, kp, ki, kd)
     radius = np.empty(len(gains))
-    # Which controller states exist (integral without ki = 0, derivative without kd = 0) changes
-    # the matrix size: one stack per pattern.
-    pattern = (gains[:, 1] != 0) * 1 + (gains[:, 2] != 0) * 2
-    for code in np.unique(pattern):
-        rows = np.flatnonzero(pattern == code)
-        ki0, kd0 = float(code & 1), float(code >> 1)
-
-        def at(p: float, i: float, d: float) -> np.ndarray:
-            return closed_loop(rig, replace(pid, kp=p, ki=i, kd=d))[0]
-
-        base = at(0.0, ki0, kd0)
-        slopes = [at(1.0, ki0, kd0) - base]
-        slopes.append(at(0.0, 2.0, kd0) - base if ki0 else np.zeros_like(base))
-        slopes.append(at(0.0, ki0, 2.0) - base if kd0 else np.zeros_like(base))
-        g = gains[rows] - np.array([0.0, ki0, kd0])
-        stack = base + np.einsum("nk,kij->nij", g, np.array(slopes))
+    for rows, stack in _closed_loop_stacks(rig, pid, gains):
         radius[rows] = np.max(np.abs(np.linalg.eigvals(stack)), axis=-1)
     return radius
 

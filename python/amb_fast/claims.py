@@ -276,6 +276,6 @@ def markdown(claims: list[Claim]) -> str:
     rows = ["| # | Observation (paper section) | Metric | Measured | Reproduced |", "|---|---|---|---|---|"]
     for claim in claims:
         cells = [claim.id, claim.statement, claim.metric, claim.measured, "yes" if claim.reproduced else "**no**"]
-        rows.append("| " + " | ".join(cell.replace("|", "/") for cell in cells) + " |")
+        rows.append("| " + " | ".join(cell.replace("|", "\\|") for cell in cells) + " |")
     done = sum(c.reproduced for c in claims)
     return "\n".join(rows) + f"\n\n{done} of {len(claims)} observations reproduced.\n"
