@@ -57,7 +57,9 @@ def test_converged_core_matches_reference_rk4(lagged_rig, pid, rng) -> None:
     assert rel(core.current, current) < 1e-9
 
 
-def test_leaving_the_air_gap_raises(pid) -> None:
+def test_reaching_the_air_gap_is_a_touchdown(pid) -> None:
     rig = af.Rig(force_law="nonlinear")
-    with pytest.raises(OverflowError, match="air gap"):
+    with pytest.raises(af.TouchdownError, match="touchdown") as info:
         af.simulate(rig, pid, np.full(400, 200.0))  # 200 N: far beyond what the pair can hold
+    assert abs(info.value.position) >= rig.gap
+    assert 0 < info.value.time < 400 / pid.fs

@@ -29,7 +29,8 @@ void bind_spectrum(py::module_& m) {
         .def_readonly("unexcited_force", &LineEstimate::unexcited_force)
         .def_readonly("unexcited_displacement", &LineEstimate::unexcited_displacement)
         .def_readonly("periods", &LineEstimate::periods)
-        .def_readonly("blocks", &LineEstimate::blocks);
+        .def_readonly("blocks", &LineEstimate::blocks)
+        .def_readonly("saturated_samples", &LineEstimate::saturated_samples);
 
     m.def("run_experiment", &run_experiment, py::arg("rig"), py::arg("pid"), py::arg("period_force"),
           py::arg("settle_periods"), py::arg("periods"), py::arg("plan"), py::arg("seed"), py::arg("median_window"),

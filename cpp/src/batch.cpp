@@ -16,6 +16,10 @@ namespace {
 constexpr Eigen::Index lanes_per_group = 32;  // gain sets advanced together; their state stays in L1
 
 void store(SweepEstimates& out, Eigen::Index row, const LineEstimate& e) {
+    if (e.saturated_samples > 0) {  // flagged, and not passed off as a clean estimate
+        out.status[row] = static_cast<int>(PointStatus::saturated);
+        return;
+    }
     out.H.row(row) = e.H.transpose();
     out.force.row(row) = e.force.transpose();
     out.displacement.row(row) = e.displacement.transpose();
@@ -45,11 +49,12 @@ struct LaneState {
     double* held;  // this sample's slot of the delay line
     double *y, *v, *i, *f, *s, *integral, *derivative, *e_prev;
     const double *kp, *ki_T, *kd_gain;
+    double *saturated, *peak;  // clipped samples; largest |y| so far
 };
 
 // One sample for every lane: what Loop::run_linear does for one loop, branch-free so it vectorises.
 template <int sensed, bool delayed>
-void step_lanes(const LaneState& st, Eigen::Index lanes, const CascadeMap& map, double a, double force) {
+void step_lanes(const LaneState& st, Eigen::Index lanes, const CascadeMap& map, double a, double limit, double force) {
     double* __restrict out_y = st.out_y;
     const double* __restrict noise = st.noise;
     double* __restrict held = st.held;
@@ -61,6 +66,8 @@ void step_lanes(const LaneState& st, Eigen::Index lanes, const CascadeMap& map, 
     double* __restrict I = st.integral;
     double* __restrict D = st.derivative;
     double* __restrict E = st.e_prev;
+    double* __restrict saturated = st.saturated;
+    double* __restrict peak = st.peak;
     for (Eigen::Index g = 0; g < lanes; ++g) {
         const double e = (sensed == state::ys ? s[g] : y[g]) + noise[g];
         double u = PidLaw::apply(st.kp[g], st.ki_T[g], st.kd_gain[g], a, e, I[g], D[g], E[g]);
@@ -69,8 +76,12 @@ void step_lanes(const LaneState& st, Eigen::Index lanes, const CascadeMap& map, 
             held[g] = u;
             u = older;
         }
+        const double wanted = u;
+        u = std::clamp(wanted, -limit, limit);  // the amplifier's limit, as in Loop::run_linear
+        saturated[g] += u != wanted;
         out_y[g] = e;
         map.advance(y[g], v[g], i[g], f[g], s[g], force, u);
+        peak[g] = std::max(peak[g], std::abs(y[g]));
     }
 }
 
@@ -91,6 +102,8 @@ void run_linear_group(const Rig& rig, const Pid& base, const Eigen::VectorXd& pe
     const auto size = static_cast<std::size_t>(lanes);
     std::vector<double> kp(size), ki_T(size), kd_gain(size);
     std::vector<double> xy(size), xv(size), xi(size), xf(size), xs(size), integral(size), derivative(size), e_prev(size);
+    std::vector<double> saturated(size), saturated_before(size), peak(size);
+    const double limit = rig.command_limit(), touchdown = rig.touchdown_at();
     std::vector<double> line(static_cast<std::size_t>(std::max<Eigen::Index>(d, 1)) * size);
     std::vector<double> displacement(static_cast<std::size_t>(L) * size), noise(displacement.size(), 0.0);
     Eigen::VectorXd lane_y(L), lane_f(L), recorded(L);
@@ -105,6 +118,7 @@ void run_linear_group(const Rig& rig, const Pid& base, const Eigen::VectorXd& pe
         force_rng.emplace_back(points[g].seed ^ 0x9e3779b97f4a7c15ULL);
         last = std::max(last, points[g].settle_periods + periods);
     }
+    std::vector<bool> touched(size, false);
     std::size_t head = 0;
 
     for (Eigen::Index p = 0; p < last; ++p) {
@@ -117,16 +131,20 @@ void run_linear_group(const Rig& rig, const Pid& base, const Eigen::VectorXd& pe
             LaneState lanes_now{&displacement[static_cast<std::size_t>(j * lanes)], &noise[static_cast<std::size_t>(j * lanes)],
                                 &line[head * size], xy.data(), xv.data(), xi.data(), xf.data(), xs.data(),
                                 integral.data(), derivative.data(), e_prev.data(), kp.data(), ki_T.data(),
-                                kd_gain.data()};
+                                kd_gain.data(), saturated.data(), peak.data()};
             if (d > 0)
-                step_lanes<sensed, true>(lanes_now, lanes, map, a, f);
+                step_lanes<sensed, true>(lanes_now, lanes, map, a, limit, f);
             else
-                step_lanes<sensed, false>(lanes_now, lanes, map, a, f);
+                step_lanes<sensed, false>(lanes_now, lanes, map, a, limit, f);
             if (d > 0 && ++head == static_cast<std::size_t>(d)) head = 0;
         }
         transducer.record(period_force.data(), L, recorded.data());
         for (Eigen::Index g = 0; g < lanes; ++g) {
-            const bool recording = p >= points[g].settle_periods && p < points[g].settle_periods + periods;
+            if (p == points[g].settle_periods) saturated_before[g] = saturated[g];
+            // A single run stops at touchdown; the lane runs on, but records no more.
+            if (peak[g] >= touchdown) touched[g] = true;
+            const bool recording =
+                !touched[g] && p >= points[g].settle_periods && p < points[g].settle_periods + periods;
             lane_f = recorded;
             if (rig.force_noise > 0.0)  // drawn whether recorded or not, as a single run draws it
                 for (Eigen::Index j = 0; j < L; ++j) lane_f[j] += rig.force_noise * force_normal[g](force_rng[g]);
@@ -136,9 +154,15 @@ void run_linear_group(const Rig& rig, const Pid& base, const Eigen::VectorXd& pe
         }
     }
     for (Eigen::Index g = 0; g < lanes; ++g) {
+        if (touched[g]) {
+            out.status[first_row + g] = static_cast<int>(PointStatus::touchdown);
+            continue;
+        }
         if (!std::isfinite(xy[g] + xv[g] + xi[g] + xf[g] + xs[g]))
             throw std::overflow_error("a point of the sweep diverged although its linearised loop is stable");
-        store(out, first_row + g, estimators[g].estimate(rig.mass, base.fs, median_window));
+        LineEstimate e = estimators[g].estimate(rig.mass, base.fs, median_window);
+        e.saturated_samples = static_cast<Eigen::Index>(saturated[g] - saturated_before[g]);
+        store(out, first_row + g, e);
     }
 }
 
@@ -151,7 +175,7 @@ void run_points(const Rig& rig, const Pid& base, const Eigen::VectorXd& period_f
                 store(out, first_row + g,
                       run_experiment(rig, with_gains(base, points[g]), period_force, points[g].settle_periods, periods,
                                      plan, points[g].seed, median_window));
-            } catch (const std::overflow_error&) {  // left the air gap: touchdown
+            } catch (const Touchdown&) {
                 out.status[first_row + g] = static_cast<int>(PointStatus::touchdown);
             }
         }

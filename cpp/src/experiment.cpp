@@ -18,11 +18,15 @@ LineEstimate run_experiment(const Rig& rig, const Pid& pid, const Eigen::Ref<con
     Loop loop(rig, pid, seed);
     PeriodEstimator estimator(plan);
     Eigen::VectorXd force(L), displacement(L), current(L);
+    Eigen::Index saturated_before_recording = 0;
     for (Eigen::Index p = 0; p < settle_periods + periods; ++p) {
+        if (p == settle_periods) saturated_before_recording = loop.saturated_samples();
         loop.run(period_force.data(), L, {force.data(), displacement.data(), current.data()});
         if (p >= settle_periods) estimator.add_period(force.data(), displacement.data(), p * L);
     }
-    return estimator.estimate(rig.mass, pid.fs, median_window);
+    LineEstimate estimate = estimator.estimate(rig.mass, pid.fs, median_window);
+    estimate.saturated_samples = loop.saturated_samples() - saturated_before_recording;
+    return estimate;
 }
 
 LineEstimate identify(const double* force, const double* displacement, Eigen::Index n, Eigen::Index settle_periods,

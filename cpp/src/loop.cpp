@@ -17,6 +17,8 @@ Loop::Loop(const Rig& rig, const Pid& pid, std::uint64_t seed)
       has_amp_(rig.amp_bandwidth.has_value()),
       drive_(force_current_index(rig)),
       magnets_(rig),
+      limit_(rig.command_limit()),
+      touchdown_(rig.touchdown_at()),
       sensor_rng_(seed),
       force_rng_(seed ^ 0x9e3779b97f4a7c15ULL),
       transducer_(rig, pid.period()) {
@@ -58,13 +60,20 @@ void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const d
     using namespace state;
     const CascadeMap& map = *map_;
     double xy = x_[y], xv = x_[v], xi = x_[i], xf = x_[i_f], xs = x_[ys];
+    const double limit = limit_, touchdown = touchdown_;
+    const bool has_clearance = std::isfinite(touchdown);  // else a diverging y (Inf) is no touchdown
+    Eigen::Index saturated = 0;
     for (Eigen::Index j = 0; j < n; ++j) {
         const double e = (sensed == ys ? xs : xy) + noise[j];
-        const double u = pid_.step(e);
+        const double wanted = pid_.step(e);
+        const double u = std::clamp(wanted, -limit, limit);  // the amplifier's limit
+        saturated += u != wanted;
         out.displacement[j] = e;
         out.current[j] = has_amp ? xi : u;
         map.advance(xy, xv, xi, xf, xs, force[j], u);
+        if (has_clearance && std::abs(xy) >= touchdown) throw Touchdown((k_ + j + 1) * T_, xy, static_cast<long>(k_ + j + 1));
     }
+    saturated_ += saturated;
     x_ << xy, xv, xi, xf, xs;
     // Inf and NaN never turn finite again in a linear recursion, so one check per chunk suffices.
     if (!x_.allFinite()) {
@@ -77,15 +86,18 @@ void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const d
 void Loop::run_nonlinear(const double* force, Eigen::Index n, Channels out, const double* noise) {
     for (Eigen::Index j = 0; j < n; ++j) {
         const double e = x_[sensed_] + noise[j];
-        const double i_cmd = pid_.step(e);
+        const double wanted = pid_.step(e);
+        const double i_cmd = std::clamp(wanted, -limit_, limit_);  // the amplifier's limit
+        saturated_ += i_cmd != wanted;
         out.displacement[j] = e;
         out.current[j] = has_amp_ ? x_[state::i] : i_cmd;
         AugmentedVector X;
         X << x_, force[j], i_cmd;
         advance_nonlinear(X);
         x_ = X.head<state::size>();
-        if (!(std::abs(x_[state::y]) < magnets_.g))  // also catches NaN
-            fail(k_ + j + 1, "the platform reached the magnet air gap (non-linear force law)");
+        if (std::abs(x_[state::y]) >= touchdown_)
+            throw Touchdown((k_ + j + 1) * T_, x_[state::y], static_cast<long>(k_ + j + 1));
+        if (!std::isfinite(x_[state::y])) fail(k_ + j + 1, "the displacement became non-finite");
     }
 }
 

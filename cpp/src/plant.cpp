@@ -4,6 +4,8 @@
 
 #include "amb_fast/errors.hpp"
 
+#include <algorithm>
+#include <limits>
 #include <stdexcept>
 
 namespace amb_fast {
@@ -25,11 +27,27 @@ void Rig::validate() const {
     require(std::isfinite(force_noise) && force_noise >= 0.0, "force_noise", force_noise, "finite and >= 0 (N rms)");
     require(std::isfinite(mass_loading) && mass_loading >= 0.0, "mass_loading", mass_loading, "finite and >= 0 (kg)");
     if (force_coupling_tau) require_positive("force_coupling_tau", *force_coupling_tau, "s");
+    if (current_limit) require_positive("current_limit", *current_limit, "A");
+    if (clearance) {
+        require_positive("clearance", *clearance, "m");
+        if (force_law == ForceLaw::nonlinear)
+            require(*clearance < gap(), "clearance", *clearance, "below the air gap i0 Kiy / (-Kyy) (m)");
+    }
     if (force_law == ForceLaw::nonlinear)
         require(kyy < 0.0, "kyy", kyy, "< 0 for the non-linear force law of a biased magnet pair (N/m)");
 }
 
 double Rig::gap() const { return bias_current * kiy / (-kyy); }
+
+double Rig::touchdown_at() const {
+    if (clearance) return *clearance;
+    return force_law == ForceLaw::nonlinear ? gap() : std::numeric_limits<double>::infinity();
+}
+
+double Rig::command_limit() const {
+    const double coils = force_law == ForceLaw::nonlinear ? bias_current : std::numeric_limits<double>::infinity();
+    return current_limit ? std::min(*current_limit, coils) : coils;
+}
 
 double Rig::magnet_force(double y, double i) const { return MagnetPair(*this).force(y, i); }
 

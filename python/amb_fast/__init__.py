@@ -15,7 +15,7 @@ except ImportError as error:  # pragma: no cover - only without a built extensio
         "from the project root (it compiles the C++ core), not by putting python/ on the path."
     ) from error
 
-from ._errors import UnstableLoopError
+from ._errors import TouchdownError, UnstableLoopError
 from ._excitation import Multisine, schroeder_multisine
 from ._experiment import Estimate, UnexcitedLines, identify, run_experiment
 from ._linear import (
@@ -45,6 +45,7 @@ __all__ = [
     "Rig",
     "StabilityMargin",
     "SweepResult",
+    "TouchdownError",
     "Trace",
     "UnexcitedLines",
     "UnstableLoopError",

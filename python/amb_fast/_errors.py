@@ -3,6 +3,24 @@
 from __future__ import annotations
 
 
+class TouchdownError(RuntimeError):
+    """The platform reached its mechanical clearance (``Rig.clearance``, by default the air gap of the
+    non-linear force law): the run stops there.
+
+    Attributes
+    ----------
+    time : float
+        When, s from the start of the run.
+    position : float
+        The platform displacement y there, m.
+    """
+
+    def __init__(self, message: str, time: float, position: float) -> None:
+        super().__init__(message)
+        self.time = time
+        self.position = position
+
+
 class UnstableLoopError(ValueError):
     """The linearised closed loop has a pole on or outside the unit circle.
 

@@ -63,6 +63,9 @@ class Estimate:
         Levels at the unexcited harmonics.
     periods : int
         Periods averaged.
+    saturated_samples : int or None
+        Recorded samples at which the amplifier clipped the current command (simulations; ``None`` for
+        recordings, where it cannot be seen). A saturated estimate is not a linear one: check it.
     blocks : int
         Independent groups behind the standard errors: every period up to 63 periods, else batch
         means of ``periods // 32`` consecutive periods (32 to 63 of them).
@@ -82,6 +85,12 @@ class Estimate:
     unexcited: UnexcitedLines
     periods: int
     blocks: int
+    saturated_samples: int | None = None
+
+    @property
+    def saturated(self) -> bool:
+        """Whether the amplifier clipped during the recorded periods."""
+        return bool(self.saturated_samples)
 
 
 def _plan(harmonics: np.ndarray, period: int) -> tuple[_core.LinePlan, np.ndarray]:
@@ -89,7 +98,9 @@ def _plan(harmonics: np.ndarray, period: int) -> tuple[_core.LinePlan, np.ndarra
     return _core.LinePlan(period=period, excited=harmonics.tolist(), unexcited=unexcited.tolist()), unexcited
 
 
-def _estimate(raw: _core.LineEstimate, harmonics: np.ndarray, unexcited: np.ndarray, f0: float) -> Estimate:
+def _estimate(
+    raw: _core.LineEstimate, harmonics: np.ndarray, unexcited: np.ndarray, f0: float, saturated: int | None = None
+) -> Estimate:
     return Estimate(
         freq=harmonics * f0,
         H=raw.H,
@@ -105,6 +116,7 @@ def _estimate(raw: _core.LineEstimate, harmonics: np.ndarray, unexcited: np.ndar
         unexcited=UnexcitedLines(unexcited * f0, raw.unexcited_force, raw.unexcited_displacement),
         periods=int(raw.periods),
         blocks=int(raw.blocks),
+        saturated_samples=saturated,
     )
 
 
@@ -131,7 +143,9 @@ def run_experiment(
     the linearised closed loop (or the force transducer's AC coupling, if slower) to decay below
     1e-9: ``ceil(ln 1e-9 / ln |z_max| / period) + 1``.
     ``seed`` fixes the measurement noise. Raises :class:`UnstableLoopError` before simulating a loop
-    with a pole on or outside the unit circle.
+    with a pole on or outside the unit circle, and :class:`TouchdownError` (time, position) if the
+    platform reaches its clearance. Amplifier saturation during the recorded periods is counted in
+    ``Estimate.saturated_samples`` and warned about.
     """
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
     require(excitation.fs == pid.fs, "excitation.fs", excitation.fs, f"equal to pid.fs ({pid.fs} Hz)")
@@ -147,7 +161,14 @@ def run_experiment(
     raw = _core.run_experiment(
         rig._to_core(), pid._to_core(), excitation.samples, settle_periods, periods, plan, seed_value(seed), window
     )
-    return _estimate(raw, harmonics, unexcited, excitation.f0)
+    if raw.saturated_samples:
+        total = periods * period
+        warnings.warn(
+            f"the amplifier saturated in {raw.saturated_samples} of {total} recorded samples: the estimate is "
+            "flagged (Estimate.saturated) and is not that of the linear loop",
+            stacklevel=2,
+        )
+    return _estimate(raw, harmonics, unexcited, excitation.f0, saturated=int(raw.saturated_samples))
 
 
 def identify(

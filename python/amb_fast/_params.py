@@ -41,6 +41,13 @@ class Rig:
     force_coupling_tau : float or None
         Discharge time constant of the AC-coupled (piezoelectric) force transducer, s: a first-order
         high-pass that leads the recorded force in phase at the lowest lines. ``None``: DC coupled.
+    clearance : float or None
+        Mechanical clearance, m: reaching |y| >= clearance is a touchdown (:class:`TouchdownError`).
+        ``None``: the air gap with the non-linear force law, no limit with the linear one.
+    current_limit : float or None
+        Amplifier limit on the control current |i|, A; the command is clipped there and the clipped
+        samples are counted (``Estimate.saturated_samples``). With the non-linear force law the coil
+        currents i0 +/- i cannot go negative, so |i| <= ``bias_current`` always. ``None``: no other limit.
     substeps : int
         Integrator steps per controller sample for the non-linear force law (integrating-factor RK4:
         the linear part is exact, the non-linear remainder is fourth order; 2 steps keep the relative
@@ -60,6 +67,8 @@ class Rig:
     force_noise: float = 0.0
     mass_loading: float = 0.0
     force_coupling_tau: float | None = None
+    clearance: float | None = None
+    current_limit: float | None = None
 
     def __post_init__(self) -> None:
         real("mass", self.mass, "kg", positive=True)
@@ -76,6 +85,9 @@ class Rig:
         require(real("force_noise", self.force_noise, "N rms") >= 0, "force_noise", self.force_noise, ">= 0 (N rms)")
         require(real("mass_loading", self.mass_loading, "kg") >= 0, "mass_loading", self.mass_loading, ">= 0 (kg)")
         optional_positive("force_coupling_tau", self.force_coupling_tau, "s")
+        optional_positive("current_limit", self.current_limit, "A")
+        if optional_positive("clearance", self.clearance, "m") is not None and self.force_law == "nonlinear":
+            require(self.clearance < self.gap, "clearance", self.clearance, f"below the air gap {self.gap:.6g} m")
 
     @classmethod
     def paper(cls) -> Rig:
@@ -119,6 +131,8 @@ class Rig:
             force_noise=self.force_noise,
             mass_loading=self.mass_loading,
             force_coupling_tau=self.force_coupling_tau,
+            clearance=self.clearance,
+            current_limit=self.current_limit,
         )
 
     @property

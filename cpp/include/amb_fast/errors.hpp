@@ -22,6 +22,24 @@ inline void require_positive(const char* name, double value, const char* unit) {
             (std::string("a finite number > 0 (") + unit + ")").c_str());
 }
 
+// The platform reached its mechanical clearance: an event that ends the run.
+struct Touchdown : std::runtime_error {
+    Touchdown(double time_, double position_, long sample_)
+        : std::runtime_error(message(time_, position_, sample_)), time(time_), position(position_), sample(sample_) {}
+    double time;      // s
+    double position;  // m
+    long sample;
+
+private:
+    static std::string message(double t, double y, long k) {
+        std::ostringstream msg;
+        msg.precision(6);
+        msg << "touchdown: the platform reached its clearance at t = " << t << " s (sample " << k << "), y = " << y
+            << " m";
+        return msg.str();
+    }
+};
+
 // Names the first non-finite sample of a series; `first` is the index of values[0] in the record.
 inline void require_finite_samples(const char* name, const double* values, long n, long first = 0) {
     for (long k = 0; k < n; ++k) {

@@ -51,11 +51,13 @@ public:
     // The seed fixes the measurement noise; it is unused when the rig has none.
     Loop(const Rig& rig, const Pid& pid, std::uint64_t seed = 0);
 
-    // Advances n samples of zero-order-held force (N) and records them. Throws std::overflow_error if
-    // the state stops being finite and, for the non-linear force law, if the platform reaches the gap.
+    // Advances n samples of zero-order-held force (N) and records them. Throws Touchdown when the
+    // platform reaches its clearance, std::overflow_error if the state stops being finite.
     void run(const double* force, Eigen::Index n, Channels out);
 
     Eigen::Index samples_done() const { return k_; }
+    // Samples at which the amplifier clipped the current command, since the start.
+    Eigen::Index saturated_samples() const { return saturated_; }
 
 private:
     static constexpr Eigen::Index chunk = 1024;  // noise is drawn a chunk at a time
@@ -78,6 +80,9 @@ private:
     MagnetPair magnets_;
     StateVector x_ = StateVector::Zero();
     Eigen::Index k_ = 0;
+    double limit_;      // amplifier limit on |i_cmd| (A), may be infinite
+    double touchdown_;  // |y| of touchdown (m), may be infinite
+    Eigen::Index saturated_ = 0;
     // One stream per noise source, so the draws do not depend on how a run is cut into chunks.
     std::mt19937_64 sensor_rng_, force_rng_;
     std::normal_distribution<double> sensor_normal_, force_normal_;

@@ -24,6 +24,8 @@ struct Rig {
     double force_noise = 0.0;      // N rms, white, added to the recorded force (not to the applied one)
     double mass_loading = 0.0;     // kg moving with the platform beyond `mass` (transducer, stinger)
     std::optional<double> force_coupling_tau;  // s, AC coupling of the piezo force transducer; empty = DC
+    std::optional<double> clearance;      // m, mechanical clearance; empty: the air gap (non-linear law) or none
+    std::optional<double> current_limit;  // A, amplifier limit on |i|; empty: i0 (non-linear law) or none
 
     // Throws std::invalid_argument naming the parameter and the value.
     void validate() const;
@@ -31,6 +33,11 @@ struct Rig {
     double moving_mass() const { return mass + mass_loading; }
     // Nominal air gap g = i0 Kiy / (-Kyy) (m) of the force law that linearises to kyy, kiy.
     double gap() const;
+    // |y| at which the platform touches down (m); infinite when there is no limit.
+    double touchdown_at() const;
+    // Largest |current command| the amplifier delivers (A): with the non-linear law the coil currents
+    // i0 +/- i cannot go negative, so at most i0; infinite when there is no limit.
+    double command_limit() const;
     // Force of the magnet pair on the platform (N) at displacement y (m) and control current i (A).
     double magnet_force(double y, double i) const;
 };

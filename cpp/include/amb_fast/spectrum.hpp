@@ -28,6 +28,7 @@ struct LineEstimate {
     Eigen::VectorXd unexcited_force, unexcited_displacement;  // N, m: amplitudes at unexcited lines
     Eigen::Index periods = 0;       // periods averaged
     Eigen::Index blocks = 0;        // independent groups behind the variance (dof = blocks - 1)
+    Eigen::Index saturated_samples = 0;  // recorded samples at which the amplifier clipped (simulations)
 };
 
 // A non-finite sample somewhere in record samples [first, first + count): the estimator checks whole
