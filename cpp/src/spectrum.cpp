@@ -171,6 +171,14 @@ LineEstimate PeriodEstimator::estimate(double mass, double fs, int median_window
         e.k_std[j] = std::sqrt(std::max(0.0, 0.5 * (abs2 + sq.real())));
         e.c_std[j] = std::sqrt(std::max(0.0, 0.5 * (abs2 - sq.real()))) / w;
     }
+    for (Eigen::Index j = 0; j < n; ++j) {  // no silent Inf or NaN: name the line
+        if (!std::isfinite(e.k[j] + e.c[j] + e.k_std[j] + e.c_std[j])) {
+            std::ostringstream msg;
+            msg << "the estimate is not finite at the excited line " << static_cast<double>(plan_.excited[j]) * fs / L
+                << " Hz: the displacement has no component there (|Y| = " << std::abs(e.displacement[j]) << " m)";
+            throw std::invalid_argument(msg.str());
+        }
+    }
     e.k_smooth = median_filter(e.k, median_window);
     e.c_smooth = median_filter(e.c, median_window);
 
