@@ -351,6 +351,7 @@ def sensitivity(rig: Rig, pid: PID, freq: ArrayLike) -> np.ndarray:
 
 def stability_margin(rig: Rig, pid: PID, points: int = 20_000) -> StabilityMargin:
     """Peak of |S| over ``points`` log-spaced frequencies from 0.01 Hz to just below Nyquist."""
+    require(isinstance(points, int) and points >= 2, "points", points, "a whole number >= 2")
     stable = bool(np.all(np.abs(closed_loop_poles(rig, pid)) < 1.0))
     if not stable:
         return StabilityMargin(np.inf, np.inf, np.nan, "D", False)

@@ -13,6 +13,7 @@ from ._experiment import Estimate, run_experiment
 from ._linear import effective_coefficients
 from ._params import PID, Rig
 from ._sweep import SweepResult, sweep
+from ._validate import real, require
 
 GAINS = ("ki", "kd", "kp")  # the paper's order: sections 3.2.1, 3.2.2, 3.2.3
 
@@ -80,7 +81,8 @@ def paper_study(
     rig = rig or Rig.paper()
     pid = pid or PID.paper()
     excitation = excitation or schroeder_multisine(fs=pid.fs)
-    scales = tuple(float(s) for s in sorted(scales))
+    scales = tuple(sorted(real("scales", s, "x baseline", positive=True) for s in scales))
+    require(len(scales) >= 3, "scales", scales, "at least three gain multipliers")
     estimate = run_experiment(rig, pid, excitation, periods=periods, seed=seed)
     k_eff, c_eff = effective_coefficients(rig, pid, estimate.freq)
     families = {

@@ -306,6 +306,11 @@ def sweep(
     todo = np.flatnonzero(stable)
     threads = workers if workers is not None else (1 if executor is not None else (os.cpu_count() or 1))
     threads = integer("workers", threads, 1)
+    require(executor is None or callable(getattr(executor, "submit", None)), "executor", executor,
+            "a concurrent.futures.Executor (with submit)")  # fmt: skip
+    if chunk_size is not None:
+        integer("chunk_size", chunk_size, 1)
+    require(progress in (None, True, False), "progress", progress, "True, False or None")
     size = chunk_size or max(128 * threads, int(np.ceil(todo.size / 16)))  # few calls, some progress
     chunks = [todo[i : i + size] for i in range(0, todo.size, size)]
     args = lambda rows: (rig, pid, excitation, gains[rows], settle[rows], seeds[rows], periods, window, threads)  # noqa: E731
