@@ -135,3 +135,12 @@ def test_vectorised_prediction_matches_one_by_one(setup) -> None:
     k1, c1 = af.effective_coefficients(rig, replace(pid, ki=1e4), excitation.freq, discrete=True)
     np.testing.assert_allclose(k[1], k1, rtol=1e-12)
     np.testing.assert_allclose(c[1], c1, rtol=1e-11)
+
+
+def test_progress_bar_when_asked_and_quiet_otherwise(setup, capsys) -> None:
+    pytest.importorskip("tqdm")
+    rig, pid, excitation = setup
+    af.sweep(rig, pid, excitation, kp=[2000.0, 2200.0], periods=2, progress=True)
+    assert "2/2" in capsys.readouterr().err
+    af.sweep(rig, pid, excitation, kp=[2000.0, 2200.0], periods=2, progress=False)
+    assert capsys.readouterr().err == ""
