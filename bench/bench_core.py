@@ -11,36 +11,22 @@ of repeated runs; the machine is noisy) and writes JSON.
 
 from __future__ import annotations
 
-import argparse
-import json
-import platform
-import time
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
+from _common import arguments, median_seconds, report
 from scipy import signal
 
 import amb_fast as af
 from amb_fast import reference
 
 
-def per_sample(run, samples: int, repeats: int) -> float:
-    """Median seconds per sample over ``repeats`` timed calls (after one warm-up)."""
-    run()
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        run()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times)) / samples
+def per_sample(run, samples: int, repeats: int) -> float:  # noqa: ANN001
+    return median_seconds(run, repeats) / samples
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="short smoke run (CI)")
-    parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "bench_core.json")
-    args = parser.parse_args()
+    args = arguments(__doc__, "bench_core")
 
     long_n, slow_n, repeats = (20_000, 2_000, 3) if args.quick else (1_000_000, 20_000, 15)
     rig = af.Rig(amp_bandwidth=1500.0, eddy_bandwidth=800.0, sensor_bandwidth=5000.0)
@@ -74,30 +60,14 @@ def main() -> None:
         print("python-control not installed (pip install 'amb_fast[bench]'): skipping that peer")
 
     core = timings["amb_fast linear (all lags)"]
-    lfilter = timings["scipy.signal.lfilter (closed-loop TF)"]
     print(f"closed-loop order {A.shape[0]}, {long_n} samples (slow peers: {slow_n}), median of {repeats}")
-    print(f"{'':42s} {'ns/sample':>10s} {'x amb_fast linear':>18s}")
-    for name, seconds in timings.items():
-        print(f"{name:42s} {seconds * 1e9:10.2f} {seconds / core:18.2f}")
-    summary = {
+    ratios = {name + " / core": seconds / core for name, seconds in timings.items()}
+    ratios |= {
         "numpy reference / core (target >= 300)": timings["numpy reference loop"] / core,
-        "core / lfilter (target <= 1.5)": core / lfilter,
+        "core / lfilter (target <= 1.5)": core / timings["scipy.signal.lfilter (closed-loop TF)"],
         "nonlinear / linear (target <= 10)": timings["amb_fast nonlinear (all lags)"] / core,
     }
-    for name, value in summary.items():
-        print(f"{name:42s} {value:10.2f}")
-
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    result = {
-        "machine": platform.platform(),
-        "processor": platform.processor(),
-        "samples": long_n,
-        "repeats": repeats,
-        "seconds_per_sample": timings,
-        "ratios": summary,
-    }
-    args.out.write_text(json.dumps(result, indent=2))
-    print(f"wrote {args.out}")
+    report(args.out, timings, ratios, "ns/sample", 1e9)
 
 
 if __name__ == "__main__":

@@ -13,33 +13,15 @@ Medians of repeated runs (the machine is noisy). Prints ratios and writes JSON.
 
 from __future__ import annotations
 
-import argparse
-import json
-import platform
-import time
-from pathlib import Path
-
 import numpy as np
+from _common import arguments, median_seconds, report
 
 import amb_fast as af
 from amb_fast import reference
 
 
-def median_seconds(run, repeats: int) -> float:
-    run()
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        run()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
-
-
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="short smoke run (CI)")
-    parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "bench_identify.json")
-    args = parser.parse_args()
+    args = arguments(__doc__, "bench_identify")
     repeats, ref_repeats, record = (3, 1, 400_000) if args.quick else (21, 3, 10_000_000)
 
     rig = af.Rig(amp_bandwidth=1500.0, eddy_bandwidth=800.0, sensor_bandwidth=5000.0)
@@ -86,13 +68,7 @@ def main() -> None:
         "identify / numpy with variance": t["identify 1e7"] / t["numpy per-period rfft + variance 1e7"],
     }
     print(f"experiment: settle {settle} + {periods} periods of {period} samples, {lines.size} lines; record {n} samples")
-    for name, seconds in t.items():
-        print(f"{name:52s} {seconds * 1e3:10.3f} ms")
-    for name, value in ratios.items():
-        print(f"{name:52s} {value:10.2f}")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps({"machine": platform.platform(), "seconds": t, "ratios": ratios}, indent=2))
-    print(f"wrote {args.out}")
+    report(args.out, t, ratios, "ms", 1e3)
 
 
 if __name__ == "__main__":

@@ -14,27 +14,15 @@ Medians of repeated runs (noisy 2-core machine). Prints ratios, writes JSON.
 
 from __future__ import annotations
 
-import argparse
-import json
-import platform
 import resource
-import time
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from _common import arguments, median_seconds, report
 from scipy import signal
 
 import amb_fast as af
-
-
-def median_seconds(run, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        run()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
 
 
 def reset_peak_rss() -> None:
@@ -63,10 +51,7 @@ def rss_bytes() -> int:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="short smoke run (CI)")
-    parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "bench_sweep.json")
-    args = parser.parse_args()
+    args = arguments(__doc__, "bench_sweep")
     points, repeats, predict_sets, memory_points = (64, 1, 1_000, 2_000) if args.quick else (1_000, 5, 100_000, 100_000)
 
     rig = af.Rig(amp_bandwidth=1500.0, eddy_bandwidth=800.0, sensor_bandwidth=5000.0)
@@ -118,13 +103,7 @@ def main() -> None:
         "memory sweep: peak RSS growth MB": grown / 1e6,
         "memory sweep: estimates MB": estimates / 1e6,
     }
-    for name, value in r.items():
-        print(f"{name:58s} {value:12.4f}")
-    for name, value in ratios.items():
-        print(f"{name:58s} {value:12.2f}")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps({"machine": platform.platform(), "seconds": r, "ratios": ratios}, indent=2))
-    print(f"wrote {args.out}")
+    report(args.out, r, ratios, "s", 1.0)
 
 
 if __name__ == "__main__":

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import Literal
 
 from . import _core
@@ -117,23 +117,9 @@ class Rig:
         return self.bias_current * self.kiy / -self.kyy
 
     def _to_core(self) -> _core.Rig:
-        return _core.Rig(
-            mass=self.mass,
-            kyy=self.kyy,
-            kiy=self.kiy,
-            bias_current=self.bias_current,
-            force_law=_core.ForceLaw.__members__[self.force_law],
-            amp_bandwidth=self.amp_bandwidth,
-            eddy_bandwidth=self.eddy_bandwidth,
-            sensor_bandwidth=self.sensor_bandwidth,
-            substeps=self.substeps,
-            sensor_noise=self.sensor_noise,
-            force_noise=self.force_noise,
-            mass_loading=self.mass_loading,
-            force_coupling_tau=self.force_coupling_tau,
-            clearance=self.clearance,
-            current_limit=self.current_limit,
-        )
+        fields = asdict(self)
+        fields["force_law"] = _core.ForceLaw.__members__[self.force_law]
+        return _core.Rig(**fields)
 
     @property
     def moving_mass(self) -> float:
@@ -185,6 +171,4 @@ class PID:
         return cls(kp=2400.0, ki=20000.0, kd=3.0, derivative_cutoff=1000.0, fs=4000.0, delay=0)
 
     def _to_core(self) -> _core.Pid:
-        return _core.Pid(
-            kp=self.kp, ki=self.ki, kd=self.kd, derivative_cutoff=self.derivative_cutoff, fs=self.fs, delay=self.delay
-        )
+        return _core.Pid(**asdict(self))
