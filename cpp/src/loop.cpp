@@ -40,14 +40,8 @@ void Loop::run(const double* force, Eigen::Index n, Channels out) {
         const double* noise = sensor_noise_.data();
         if (rig_.force_law == ForceLaw::nonlinear)
             run_nonlinear(force + start, m, part, noise);
-        // Which state the sensor reads and where the coil current comes from are compile-time
-        // constants in the kernel, so the state stays in registers.
-        else if (sensed_ == state::ys)
-            has_amp_ ? run_linear<state::ys, true>(force + start, m, part, noise)
-                     : run_linear<state::ys, false>(force + start, m, part, noise);
         else
-            has_amp_ ? run_linear<state::y, true>(force + start, m, part, noise)
-                     : run_linear<state::y, false>(force + start, m, part, noise);
+            run_linear(force + start, m, part, noise);
         transducer_.record(force + start, m, part.force);
         if (rig_.force_noise > 0.0)
             for (Eigen::Index j = 0; j < m; ++j) part.force[j] += rig_.force_noise * force_normal_(force_rng_);
@@ -55,7 +49,26 @@ void Loop::run(const double* force, Eigen::Index n, Channels out) {
     }
 }
 
-template <int sensed, bool has_amp>
+// Which state the sensor reads, where the coil current comes from, and whether a current limit or a
+// clearance is to be watched are compile-time constants in the kernel, so the state stays in
+// registers and the common case pays for no checks.
+void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise) {
+    const bool checked = std::isfinite(limit_) || std::isfinite(touchdown_);
+    const bool ys = sensed_ == state::ys;
+    if (checked) {
+        if (ys)
+            has_amp_ ? run_linear<state::ys, true, true>(force, n, out, noise) : run_linear<state::ys, false, true>(force, n, out, noise);
+        else
+            has_amp_ ? run_linear<state::y, true, true>(force, n, out, noise) : run_linear<state::y, false, true>(force, n, out, noise);
+    } else {
+        if (ys)
+            has_amp_ ? run_linear<state::ys, true, false>(force, n, out, noise) : run_linear<state::ys, false, false>(force, n, out, noise);
+        else
+            has_amp_ ? run_linear<state::y, true, false>(force, n, out, noise) : run_linear<state::y, false, false>(force, n, out, noise);
+    }
+}
+
+template <int sensed, bool has_amp, bool checked>
 void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise) {
     using namespace state;
     const CascadeMap& map = *map_;
@@ -66,12 +79,15 @@ void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const d
     for (Eigen::Index j = 0; j < n; ++j) {
         const double e = (sensed == ys ? xs : xy) + noise[j];
         const double wanted = pid_.step(e);
-        const double u = std::clamp(wanted, -limit, limit);  // the amplifier's limit
-        saturated += u != wanted;
+        // The amplifier's limit (with none, clamping to +-Inf would change nothing, not even a bit).
+        const double u = checked ? std::clamp(wanted, -limit, limit) : wanted;
+        if constexpr (checked) saturated += u != wanted;
         out.displacement[j] = e;
         out.current[j] = has_amp ? xi : u;
         map.advance(xy, xv, xi, xf, xs, force[j], u);
-        if (has_clearance && std::abs(xy) >= touchdown) throw Touchdown((k_ + j + 1) * T_, xy, static_cast<long>(k_ + j + 1));
+        if constexpr (checked)
+            if (has_clearance && std::abs(xy) >= touchdown)
+                throw Touchdown((k_ + j + 1) * T_, xy, static_cast<long>(k_ + j + 1));
     }
     saturated_ += saturated;
     x_ << xy, xv, xi, xf, xs;

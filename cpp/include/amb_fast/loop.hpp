@@ -62,7 +62,8 @@ public:
 private:
     static constexpr Eigen::Index chunk = 1024;  // noise is drawn a chunk at a time
 
-    template <int sensed, bool has_amp>
+    void run_linear(const double* force, Eigen::Index n, Channels out, const double* noise);
+    template <int sensed, bool has_amp, bool checked>
     void run_linear(const double* force, Eigen::Index n, Channels out, const double* noise);
     void run_nonlinear(const double* force, Eigen::Index n, Channels out, const double* noise);
     void advance_nonlinear(AugmentedVector& X) const;
