@@ -9,8 +9,9 @@ using InputArray = py::array_t<double, py::array::c_style | py::array::forcecast
 
 void bind_spectrum(py::module_& m) {
     py::class_<LinePlan>(m, "LinePlan", "Period length (samples) and the harmonic numbers of excited/unexcited lines.")
-        .def(py::init([](Eigen::Index period, std::vector<Eigen::Index> excited, std::vector<Eigen::Index> unexcited) {
-                 LinePlan plan{period, std::move(excited), std::move(unexcited), 1};
+        .def(py::init([](Eigen::Index period, const Eigen::Ref<const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>>& excited,
+                         const Eigen::Ref<const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>>& unexcited) {
+                 LinePlan plan{period, {excited.begin(), excited.end()}, {unexcited.begin(), unexcited.end()}, 1};
                  plan.validate();
                  return plan;
              }),

@@ -6,6 +6,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal, Union
 
+import functools
+
 import numpy as np
 
 from ._validate import integer, real, require
@@ -47,7 +49,7 @@ class Multisine:
     def period_samples(self) -> int:
         return int(self.samples.size)
 
-    @property
+    @functools.cached_property
     def harmonics(self) -> np.ndarray:
         """Harmonic numbers of the excited lines (freq / f0)."""
         return np.rint(self.freq / self.f0).astype(np.int64)

@@ -94,8 +94,11 @@ class Estimate:
 
 
 def _plan(harmonics: np.ndarray, period: int) -> tuple[_core.LinePlan, np.ndarray]:
-    unexcited = np.setdiff1d(np.arange(1, harmonics.max() + 1), harmonics)
-    return _core.LinePlan(period=period, excited=harmonics.tolist(), unexcited=unexcited.tolist()), unexcited
+    gaps = np.ones(int(harmonics.max()) + 1, dtype=bool)
+    gaps[0] = False
+    gaps[harmonics] = False
+    unexcited = np.flatnonzero(gaps)
+    return _core.LinePlan(period=period, excited=harmonics, unexcited=unexcited), unexcited
 
 
 def _estimate(
@@ -154,7 +157,7 @@ def run_experiment(
     period = excitation.period_samples
     poles = require_stable(rig, pid)
     if settle_periods is None:  # the same rule as amb_fast.sweep, so a sweep point reruns bit for bit
-        settle_periods = int(settle_periods_for(settling_radius(rig, pid, np.max(np.abs(poles))), period))
+        settle_periods = int(settle_periods_for(settling_radius(rig, pid, float(np.max(np.abs(poles)))), period))
     settle_periods = integer("settle_periods", settle_periods, 0)
     harmonics = excitation.harmonics
     plan, unexcited = _plan(harmonics, period)

@@ -146,11 +146,13 @@ def closed_loop_poles(rig: Rig, pid: PID) -> np.ndarray:
     return np.linalg.eigvals(closed_loop(rig, pid)[0])
 
 
+@functools.lru_cache(maxsize=256)
 def require_stable(rig: Rig, pid: PID) -> np.ndarray:
-    """The closed-loop poles (as :func:`spectral_radius` computes them), or :class:`UnstableLoopError`
-    naming the unstable ones and the gains."""
+    """The closed-loop poles (as :func:`spectral_radius` computes them, read-only), or
+    :class:`UnstableLoopError` naming the unstable ones and the gains."""
     ((_, stack),) = _closed_loop_stacks(rig, pid, _gain_arrays(pid, None, None, None))
     poles = np.linalg.eigvals(stack)[0]
+    poles.flags.writeable = False
     bad = poles[np.abs(poles) >= 1.0]
     if bad.size:
         shown = ", ".join(f"{p:.6g} (|z|={abs(p):.6g})" for p in bad[:4])

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import asdict, dataclass
 from typing import Literal
 
@@ -117,9 +118,7 @@ class Rig:
         return self.bias_current * self.kiy / -self.kyy
 
     def _to_core(self) -> _core.Rig:
-        fields = asdict(self)
-        fields["force_law"] = _core.ForceLaw.__members__[self.force_law]
-        return _core.Rig(**fields)
+        return _core_rig(self)
 
     @property
     def moving_mass(self) -> float:
@@ -171,4 +170,17 @@ class PID:
         return cls(kp=2400.0, ki=20000.0, kd=3.0, derivative_cutoff=1000.0, fs=4000.0, delay=0)
 
     def _to_core(self) -> _core.Pid:
-        return _core.Pid(**asdict(self))
+        return _core_pid(self)
+
+
+# The core's copies of the parameters, made once per distinct value (the dataclasses are frozen).
+@functools.lru_cache(maxsize=256)
+def _core_rig(rig: Rig) -> _core.Rig:
+    fields = asdict(rig)
+    fields["force_law"] = _core.ForceLaw.__members__[rig.force_law]
+    return _core.Rig(**fields)
+
+
+@functools.lru_cache(maxsize=256)
+def _core_pid(pid: PID) -> _core.Pid:
+    return _core.Pid(**asdict(pid))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import secrets
 from numbers import Integral, Real
 from typing import Any
 
@@ -51,5 +52,5 @@ def finite_series(name: str, values: Any) -> np.ndarray:
 def seed_value(seed: Any) -> int:
     """A 64-bit seed for the core's noise generator; ``None`` draws a fresh one."""
     if seed is None:
-        return int(np.random.SeedSequence().generate_state(1, np.uint64)[0])
+        return secrets.randbits(64)
     return integer("seed", seed, 0) % 2**64
