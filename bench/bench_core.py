@@ -1,10 +1,11 @@
 """Time per simulated sample of the compiled loop against its peers, measured in one run.
 
 "amb_fast linear" is the compiled core as called by amb_fast.simulate; the row below it adds the
-Python layer's input handling (conversion and a private copy of the force). Peers: the pure-numpy reference loop, scipy.signal.dlsim and python-control's forced_response on the
-same closed loop as one discrete state space, and scipy.signal.lfilter on its force-to-displacement
-transfer function (the compiled floor for a linear recursion of that order). Prints ratios (medians
-of repeated runs; the machine is noisy) and writes JSON.
+Python layer (input conversion and checks). Peers: the pure-numpy reference loop, scipy.signal.dlsim
+and python-control's forced_response on the same closed loop as one discrete state space, and
+scipy.signal.lfilter on its force-to-displacement transfer function (the compiled floor for a linear
+recursion of that order). Prints ratios (medians of repeated runs; the machine is noisy) and writes
+JSON.
 
     python bench/bench_core.py [--quick] [--out bench/results/bench_core.json]
 """
@@ -14,10 +15,10 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from _common import arguments, median_seconds, report
 from scipy import signal
 
 import amb_fast as af
+from _common import arguments, median_seconds, report
 from amb_fast import reference
 
 

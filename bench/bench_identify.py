@@ -14,9 +14,9 @@ Medians of repeated runs (the machine is noisy). Prints ratios and writes JSON.
 from __future__ import annotations
 
 import numpy as np
-from _common import arguments, median_seconds, report
 
 import amb_fast as af
+from _common import arguments, median_seconds, report
 from amb_fast import reference
 
 
@@ -67,7 +67,9 @@ def main() -> None:
         "identify / numpy reshape-mean + rfft (target <= 1)": t["identify 1e7"] / t["numpy reshape-mean + rfft 1e7"],
         "identify / numpy with variance": t["identify 1e7"] / t["numpy per-period rfft + variance 1e7"],
     }
-    print(f"experiment: settle {settle} + {periods} periods of {period} samples, {lines.size} lines; record {n} samples")
+    print(
+        f"experiment: settle {settle} + {periods} periods of {period} samples, {lines.size} lines; record {n} samples"
+    )
     report(args.out, t, ratios, "ms", 1e3)
 
 

@@ -19,10 +19,10 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-from _common import arguments, median_seconds, report
 from scipy import signal
 
 import amb_fast as af
+from _common import arguments, median_seconds, report
 
 
 def reset_peak_rss() -> None:

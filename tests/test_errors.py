@@ -13,7 +13,9 @@ import amb_fast as af
 
 ROWS = [
     row
-    for row in re.findall(r"^\| `(.+?)` \| (\w+) \| (.+?) \|$", (Path(__file__).parents[1] / "docs" / "errors.md").read_text(), re.M)
+    for row in re.findall(
+        r"^\| `(.+?)` \| (\w+) \| (.+?) \|$", (Path(__file__).parents[1] / "docs" / "errors.md").read_text(), re.M
+    )
 ]
 CLASSES = {"ValueError": ValueError, "OverflowError": OverflowError, "UnstableLoopError": af.UnstableLoopError,
            "TouchdownError": af.TouchdownError}  # fmt: skip

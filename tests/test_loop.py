@@ -6,11 +6,11 @@ import itertools
 
 import numpy as np
 import pytest
-from conftest import ALL_LAGS, GAINS
 from scipy import signal
 
 import amb_fast as af
 from amb_fast import reference
+from conftest import ALL_LAGS, GAINS
 
 TOL = 1e-10  # relative to the largest value of each channel
 

@@ -1,4 +1,4 @@
-"""Type stubs for the compiled core (cpp/bindings)."""
+"""Type stubs for the compiled core (cpp/bindings). Units as in the Python layer: SI, Hz."""
 
 from enum import Enum
 
@@ -8,6 +8,12 @@ from numpy.typing import ArrayLike
 class ForceLaw(Enum):
     linear = ...
     nonlinear = ...
+
+class PointStatus(Enum):
+    ok = ...
+    unstable = ...
+    touchdown = ...
+    saturated = ...
 
 class Rig:
     def __init__(
@@ -22,6 +28,12 @@ class Rig:
         eddy_bandwidth: float | None,
         sensor_bandwidth: float | None,
         substeps: int,
+        sensor_noise: float = 0.0,
+        force_noise: float = 0.0,
+        mass_loading: float = 0.0,
+        force_coupling_tau: float | None = None,
+        clearance: float | None = None,
+        current_limit: float | None = None,
     ) -> None: ...
     def magnet_force(self, y: float, i: float) -> float: ...
     @property
@@ -32,4 +44,72 @@ class Pid:
         self, *, kp: float, ki: float, kd: float, derivative_cutoff: float | None, fs: float, delay: int
     ) -> None: ...
 
-def simulate(rig: Rig, pid: Pid, force: ArrayLike) -> tuple[np.ndarray, np.ndarray]: ...
+class LinePlan:
+    def __init__(self, *, period: int, excited: ArrayLike, unexcited: ArrayLike) -> None: ...
+
+class LineEstimate:
+    force: np.ndarray
+    displacement: np.ndarray
+    H: np.ndarray
+    k: np.ndarray
+    c: np.ndarray
+    k_std: np.ndarray
+    c_std: np.ndarray
+    k_smooth: np.ndarray
+    c_smooth: np.ndarray
+    unexcited_force: np.ndarray
+    unexcited_displacement: np.ndarray
+    periods: int
+    blocks: int
+    saturated_samples: int
+
+class SweepEstimates:
+    H: np.ndarray
+    force: np.ndarray
+    displacement: np.ndarray
+    k: np.ndarray
+    c: np.ndarray
+    k_std: np.ndarray
+    c_std: np.ndarray
+    k_smooth: np.ndarray
+    c_smooth: np.ndarray
+    unexcited_force: np.ndarray
+    unexcited_displacement: np.ndarray
+    status: np.ndarray
+    periods: int
+    blocks: int
+
+def simulate(rig: Rig, pid: Pid, force: ArrayLike, seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+def run_experiment(
+    rig: Rig,
+    pid: Pid,
+    period_force: ArrayLike,
+    settle_periods: int,
+    periods: int,
+    plan: LinePlan,
+    seed: int,
+    median_window: int,
+) -> LineEstimate: ...
+def identify(
+    force: ArrayLike,
+    displacement: ArrayLike,
+    settle_periods: int,
+    plan: LinePlan,
+    mass: float,
+    fs: float,
+    median_window: int,
+) -> LineEstimate: ...
+def run_sweep(
+    rig: Rig,
+    pid: Pid,
+    period_force: ArrayLike,
+    kp: ArrayLike,
+    ki: ArrayLike,
+    kd: ArrayLike,
+    settle_periods: ArrayLike,
+    seeds: ArrayLike,
+    periods: int,
+    plan: LinePlan,
+    median_window: int,
+    workers: int,
+) -> SweepEstimates: ...

@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal, Union
-
-import functools
 
 import numpy as np
 
@@ -89,7 +88,9 @@ def _select_lines(lines: Lines, top: int, f0: float, rng: np.random.Generator) -
         freq.ndim == 1 and freq.size > 0 and bool(np.all(np.abs(harmonics * f0 - freq) < 1e-9 * f0)),
         "lines", lines, "'all', 'odd', 'random-odd' or a 1-D array of multiples of f0 (Hz)",
     )  # fmt: skip
-    require(bool(np.all((harmonics >= 1) & (harmonics <= top))), "lines", lines, f"between f0 and f_max ({top * f0} Hz)")
+    require(
+        bool(np.all((harmonics >= 1) & (harmonics <= top))), "lines", lines, f"between f0 and f_max ({top * f0} Hz)"
+    )
     require(np.unique(harmonics).size == harmonics.size, "lines", lines, "without repeats")
     return np.sort(harmonics).astype(np.int64)
 

@@ -231,7 +231,11 @@ def _lines(force: np.ndarray, period: int, f0: float, fs: float, f_max: float | 
     if lines is not None:
         freq = np.atleast_1d(np.asarray(lines, dtype=float))
         harmonics = np.rint(freq / f0)
-        ok = freq.ndim == 1 and bool(np.all(np.isfinite(freq))) and bool(np.all(np.abs(harmonics * f0 - freq) < 1e-6 * f0))
+        ok = (
+            freq.ndim == 1
+            and bool(np.all(np.isfinite(freq)))
+            and bool(np.all(np.abs(harmonics * f0 - freq) < 1e-6 * f0))
+        )
         require(ok, "lines", lines, "a 1-D array of multiples of f0 (Hz)")
         require(bool(np.all((harmonics >= 1) & (harmonics <= top))), "lines", lines,
                 f"within the band f0..{top * f0} Hz")  # fmt: skip

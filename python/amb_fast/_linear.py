@@ -47,18 +47,12 @@ def plant_matrices(rig: Rig) -> tuple[np.ndarray, np.ndarray, list[str]]:
     term("v", "y", -rig.kyy / m)
     term("v", driving, -rig.kiy / m)
     B[states.index("v"), 0] = 1.0 / m
-    if "i" in states:
-        wa = 2 * np.pi * rig.amp_bandwidth
-        term("i", "i", -wa)
-        term("i", "cmd", wa)
-    if "i_f" in states:
-        we = 2 * np.pi * rig.eddy_bandwidth
-        term("i_f", "i_f", -we)
-        term("i_f", coil, we)
-    if "ys" in states:
-        ws = 2 * np.pi * rig.sensor_bandwidth
-        term("ys", "ys", -ws)
-        term("ys", "y", ws)
+    # Each first-order stage relaxes to its input at w = 2 pi * bandwidth.
+    inputs = {"i": "cmd", "i_f": coil, "ys": "y"}
+    for name, bandwidth in stages:
+        if bandwidth is not None:
+            term(name, name, -2 * np.pi * bandwidth)
+            term(name, inputs[name], 2 * np.pi * bandwidth)
     return A, B, states
 
 
@@ -174,7 +168,9 @@ def _gain_arrays(pid: PID, kp: ArrayLike | None, ki: ArrayLike | None, kd: Array
 
 
 @functools.lru_cache(maxsize=64)
-def _affine_closed_loop(rig: Rig, pid: PID, with_integral: bool, with_derivative: bool) -> tuple[np.ndarray, np.ndarray]:
+def _affine_closed_loop(
+    rig: Rig, pid: PID, with_integral: bool, with_derivative: bool
+) -> tuple[np.ndarray, np.ndarray]:
     """The closed-loop matrix is affine in (kp, ki, kd) for a given set of controller states:
     ``A = base + kp S0 + (ki - ki0) S1 + (kd - kd0) S2`` with ki0, kd0 = 1 where the state exists.
     ``pid``'s own gains do not matter here (callers pass them as zero, for the cache)."""
@@ -218,7 +214,7 @@ def spectral_radius(
     return radius
 
 
-def settling_radius(rig: Rig, pid: PID, radius: np.ndarray) -> np.ndarray:
+def settling_radius(rig: Rig, pid: PID, radius: ArrayLike) -> np.ndarray:
     """The slowest decay per sample of a run: the loop's spectral ``radius``, or the force transducer's
     AC-coupling pole ``exp(-1/(fs tau))`` when that is slower (it settles on the applied force)."""
     if rig.force_coupling_tau is None:
@@ -406,12 +402,11 @@ def effective_coefficients(
     """
     f = _frequencies(freq)
     if kp is not None or ki is not None or kd is not None:
-        require(isinstance(controller, PID), "controller", controller, "a PID when kp, ki or kd arrays are given")
+        if not isinstance(controller, PID):
+            raise ValueError(f"controller must be a PID when kp, ki or kd arrays are given, got {controller!r}")
         gains = _gain_arrays(controller, kp, ki, kd)
         unit = [replace(controller, kp=float(j == 0), ki=float(j == 1), kd=float(j == 2)) for j in range(3)]
         terms = np.array([controller_response(u, f.ravel(), discrete=discrete) for u in unit])
-        if discrete:  # the digital kp term carries the delay too; controller_response includes it
-            pass
         G = gains @ terms  # (gain sets, freq)
         return rig.kyy + rig.kiy * G.real, rig.kiy * G.imag / (2 * np.pi * f.ravel())
     G = controller_response(controller, f, discrete=discrete)

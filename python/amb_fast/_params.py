@@ -82,13 +82,16 @@ class Rig:
         for name in ("amp_bandwidth", "eddy_bandwidth", "sensor_bandwidth"):
             optional_positive(name, getattr(self, name), "Hz")
         integer("substeps", self.substeps, 1)
-        require(real("sensor_noise", self.sensor_noise, "m rms") >= 0, "sensor_noise", self.sensor_noise, ">= 0 (m rms)")
+        require(
+            real("sensor_noise", self.sensor_noise, "m rms") >= 0, "sensor_noise", self.sensor_noise, ">= 0 (m rms)"
+        )
         require(real("force_noise", self.force_noise, "N rms") >= 0, "force_noise", self.force_noise, ">= 0 (N rms)")
         require(real("mass_loading", self.mass_loading, "kg") >= 0, "mass_loading", self.mass_loading, ">= 0 (kg)")
         optional_positive("force_coupling_tau", self.force_coupling_tau, "s")
         optional_positive("current_limit", self.current_limit, "A")
-        if optional_positive("clearance", self.clearance, "m") is not None and self.force_law == "nonlinear":
-            require(self.clearance < self.gap, "clearance", self.clearance, f"below the air gap {self.gap:.6g} m")
+        clearance = optional_positive("clearance", self.clearance, "m")
+        if clearance is not None and self.force_law == "nonlinear":
+            require(clearance < self.gap, "clearance", clearance, f"below the air gap {self.gap:.6g} m")
 
     @classmethod
     def paper(cls) -> Rig:

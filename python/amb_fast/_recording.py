@@ -87,7 +87,9 @@ def _read_csv(path: Path) -> dict[str, np.ndarray]:
 def _read_mat(path: Path) -> dict[str, np.ndarray]:
     from scipy.io import loadmat
 
-    content = {k: v for k, v in loadmat(path, squeeze_me=True, struct_as_record=False).items() if not k.startswith("__")}
+    content = {
+        k: v for k, v in loadmat(path, squeeze_me=True, struct_as_record=False).items() if not k.startswith("__")
+    }
     channels: dict[str, np.ndarray] = {}
     for key, value in content.items():
         if hasattr(value, "Y") and hasattr(value, "X"):  # dSPACE export

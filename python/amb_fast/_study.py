@@ -86,8 +86,15 @@ def paper_study(
     estimate = run_experiment(rig, pid, excitation, periods=periods, seed=seed)
     k_eff, c_eff = effective_coefficients(rig, pid, estimate.freq)
     families = {
-        name: sweep(rig, pid, excitation, **{name: getattr(pid, name) * np.array(scales)}, periods=periods,
-                    seed=seed + 1 + j, progress=progress)  # fmt: skip
+        name: sweep(
+            rig,
+            pid,
+            excitation,
+            **{name: getattr(pid, name) * np.array(scales)},
+            periods=periods,
+            seed=seed + 1 + j,
+            progress=progress,
+        )  # fmt: skip
         for j, name in enumerate(GAINS)
     }
     for name, result in families.items():

@@ -89,7 +89,9 @@ class SweepResult:
             raise ImportError("to_xarray needs xarray: pip install 'amb_fast[xarray]'") from error
         if self.grid == "product":
             dims = list(self.axes)
-            coords: dict[str, Any] = {name: (name, values, {"units": UNITS[name]}) for name, values in self.axes.items()}
+            coords: dict[str, Any] = {
+                name: (name, values, {"units": UNITS[name]}) for name, values in self.axes.items()
+            }
         else:
             dims = ["point"]
             coords = {name: ("point", values, {"units": UNITS[name]}) for name, values in self.points.items()}

@@ -28,7 +28,7 @@ def optional_positive(name: str, value: Any, unit: str) -> float | None:
 
 
 def integer(name: str, value: Any, minimum: int) -> int:
-    ok = isinstance(value, Integral) and not isinstance(value, bool) and value >= minimum
+    ok = isinstance(value, Integral) and not isinstance(value, bool) and int(value) >= minimum
     require(ok, name, value, f"a whole number >= {minimum}")
     return int(value)
 

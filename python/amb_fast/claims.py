@@ -150,7 +150,9 @@ def ki_raises_low_frequency_stiffness(freq: np.ndarray, gains: np.ndarray, k: np
     )  # fmt: skip
 
 
-def ki_raises_stiffness_near_resonance_marginally(freq: np.ndarray, gains: np.ndarray, k: np.ndarray, H: np.ndarray) -> Claim:
+def ki_raises_stiffness_near_resonance_marginally(
+    freq: np.ndarray, gains: np.ndarray, k: np.ndarray, H: np.ndarray
+) -> Claim:
     fn = np.array([natural_frequency(freq, h) for h in H])
     near = _band(freq, fn[len(fn) // 2] - 5, fn[len(fn) // 2] + 5)
     around = k[:, near].mean(axis=1)
@@ -199,7 +201,9 @@ def kd_changes_stiffness_at_high_frequency_only(freq: np.ndarray, gains: np.ndar
 # --- Section 3.2.3: proportional gain ------------------------------------------------------------
 
 
-def kp_raises_stiffness_and_natural_frequency(freq: np.ndarray, gains: np.ndarray, k: np.ndarray, H: np.ndarray) -> Claim:
+def kp_raises_stiffness_and_natural_frequency(
+    freq: np.ndarray, gains: np.ndarray, k: np.ndarray, H: np.ndarray
+) -> Claim:
     stiffness = k.mean(axis=1)
     fn = np.array([natural_frequency(freq, h) for h in H])
     ok = _increasing(stiffness) and _increasing(fn)

@@ -21,7 +21,7 @@ from ._linear import closed_loop_poles, stability_margin
 from ._params import PID, Rig
 from ._recording import load_recording
 from ._sweep import sweep
-from .claims import markdown, natural_frequency
+from .claims import natural_frequency
 
 RIG_OPTIONS = {  # option -> (Rig field, unit, help)
     "mass": ("mass", "kg", "known moving mass m of eq. 9"),
@@ -150,7 +150,9 @@ def save_estimate(estimate: Estimate, path: Path) -> None:
 def cmd_run(args: argparse.Namespace) -> None:
     rig, pid = _model(args)
     excitation = _excitation(args, pid)
-    estimate = run_experiment(rig, pid, excitation, periods=args.periods, settle_periods=args.settle_periods, seed=args.seed)
+    estimate = run_experiment(
+        rig, pid, excitation, periods=args.periods, settle_periods=args.settle_periods, seed=args.seed
+    )
     print(_summary(estimate, rig, pid, args.at))
     if args.save:
         save_estimate(estimate, args.save)
@@ -219,7 +221,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="{paper,run,sweep,identify}")
 
-    paper = sub.add_parser("paper", allow_abbrev=False, help="reproduce the paper: figures, curves (CSV, NetCDF) and claims report")
+    paper = sub.add_parser(
+        "paper", allow_abbrev=False, help="reproduce the paper: figures, curves (CSV, NetCDF) and claims report"
+    )
     paper.add_argument("--out", type=Path, default=Path("paper-output"), help="output folder (default paper-output)")
     paper.add_argument("--seed", type=int, default=2026, help="seed of the measurement noise")
     paper.add_argument("--no-progress", action="store_true", help="no progress lines")
@@ -243,7 +247,9 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--no-progress", action="store_true", help="no progress bar")
     sw.set_defaults(func=cmd_sweep)
 
-    ident = sub.add_parser("identify", allow_abbrev=False, help="k and c from a recording (CSV with named columns, or .mat)")
+    ident = sub.add_parser(
+        "identify", allow_abbrev=False, help="k and c from a recording (CSV with named columns, or .mat)"
+    )
     ident.add_argument("file", type=Path, help="recording: .csv (header names the columns) or .mat")
     ident.add_argument("--force", default="force", help="force channel name (N; default 'force')")
     ident.add_argument("--displacement", default="displacement", help="displacement channel name (m)")

@@ -86,17 +86,18 @@ def write_figures(study: PaperStudy, out: Path) -> list[Path]:
 
 def report(study: PaperStudy, table: str) -> str:
     rig, pid, ex = study.rig, study.pid, study.excitation
-    lags = ", ".join(f"{n.replace('_', ' ')} {getattr(rig, n):g} Hz" for n in ("amp_bandwidth", "eddy_bandwidth",
-                                                                              "sensor_bandwidth") if getattr(rig, n))  # fmt: skip
+    stages = ("amp_bandwidth", "eddy_bandwidth", "sensor_bandwidth")
+    lags = ", ".join(f"{n.replace('_', ' ')} {getattr(rig, n):g} Hz" for n in stages if getattr(rig, n))
     scales = ", ".join(f"{s:g}" for s in study.scales)
+    rms = np.sqrt(np.mean(ex.samples**2))
     return f"""# Claims of the paper, checked on the virtual rig
 
 Rig: m = {rig.mass} kg (+ {rig.mass_loading} kg mass loading), Kyy = {rig.kyy} N/m, Kiy = {rig.kiy} N/A; {lags};
 force transducer AC coupled with tau = {rig.force_coupling_tau} s; noise {rig.sensor_noise} m rms (probe),
 {rig.force_noise} N rms (force); {rig.force_law} force law.
-Controller: kp = {pid.kp} A/m, ki = {pid.ki} A/(m s), kd = {pid.kd} A s/m, derivative filter {pid.derivative_cutoff} Hz,
-fs = {pid.fs} Hz, delay {pid.delay} samples.
-Experiment: Schroeder multisine {ex.freq[0]:g}-{ex.freq[-1]:g} Hz, f0 = {ex.f0:g} Hz, {np.sqrt(np.mean(ex.samples**2)):.3g} N rms,
+Controller: kp = {pid.kp} A/m, ki = {pid.ki} A/(m s), kd = {pid.kd} A s/m,
+derivative filter {pid.derivative_cutoff} Hz, fs = {pid.fs} Hz, delay {pid.delay} samples.
+Experiment: Schroeder multisine {ex.freq[0]:g}-{ex.freq[-1]:g} Hz, f0 = {ex.f0:g} Hz, {rms:.3g} N rms,
 {study.estimate.periods} periods averaged, median filter over 5 lines. Gain families: each gain times {scales}.
 
 {table}"""

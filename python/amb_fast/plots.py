@@ -100,7 +100,9 @@ def plot_estimate(estimate: Estimate, *, title: str = "Identified stiffness, dam
     """One estimate: k and c with their standard errors, and |Y/F|."""
     fig, axes = _figure(3, height=2.6)
     f = estimate.freq
-    axes[0].errorbar(f, estimate.k / 1e3, yerr=2 * estimate.k_std / 1e3, fmt=".", ms=3, color="0.5", label="raw, 2 s.e.")
+    axes[0].errorbar(
+        f, estimate.k / 1e3, yerr=2 * estimate.k_std / 1e3, fmt=".", ms=3, color="0.5", label="raw, 2 s.e."
+    )
     axes[0].plot(f, estimate.k_smooth / 1e3, label="median filtered")
     axes[1].errorbar(f, estimate.c, yerr=2 * estimate.c_std, fmt=".", ms=3, color="0.5")
     axes[1].plot(f, estimate.c_smooth)

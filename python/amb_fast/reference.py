@@ -75,7 +75,6 @@ def _rk4_sample(rig: Rig, states: list[str], x: np.ndarray, f: float, i_cmd: flo
     return x
 
 
-
 def receptance(rig: Rig, pid: PID, freq: np.ndarray) -> np.ndarray:
     """Y/F at ``freq`` (Hz) by composing transfer functions, not by the closed-loop state space:
     ys/f = P_f / (1 - P_i G z^-d), with the plant's two ZOH transfer functions P_f, P_i from
