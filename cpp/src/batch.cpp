@@ -53,7 +53,7 @@ struct LaneState {
 };
 
 // One sample for every lane: what Loop::run_linear does for one loop, branch-free so it vectorises.
-template <int sensed, bool delayed>
+template <int sensed, bool delayed, bool checked>
 void step_lanes(const LaneState& st, Eigen::Index lanes, const CascadeMap& map, double a, double limit, double force) {
     double* __restrict out_y = st.out_y;
     const double* __restrict noise = st.noise;
@@ -76,12 +76,14 @@ void step_lanes(const LaneState& st, Eigen::Index lanes, const CascadeMap& map, 
             held[g] = u;
             u = older;
         }
-        const double wanted = u;
-        u = std::clamp(wanted, -limit, limit);  // the amplifier's limit, as in Loop::run_linear
-        saturated[g] += u != wanted;
+        if constexpr (checked) {  // the amplifier's limit, as in Loop::run_linear
+            const double wanted = u;
+            u = std::clamp(wanted, -limit, limit);
+            saturated[g] += u != wanted;
+        }
         out_y[g] = e;
         map.advance(y[g], v[g], i[g], f[g], s[g], force, u);
-        peak[g] = std::max(peak[g], std::abs(y[g]));
+        if constexpr (checked) peak[g] = std::max(peak[g], std::abs(y[g]));
     }
 }
 
@@ -104,6 +106,7 @@ void run_linear_group(const Rig& rig, const Pid& base, const Eigen::VectorXd& pe
     std::vector<double> xy(size), xv(size), xi(size), xf(size), xs(size), integral(size), derivative(size), e_prev(size);
     std::vector<double> saturated(size), saturated_before(size), peak(size);
     const double limit = rig.command_limit(), touchdown = rig.touchdown_at();
+    const bool checked = std::isfinite(limit) || std::isfinite(touchdown);
     std::vector<double> line(static_cast<std::size_t>(std::max<Eigen::Index>(d, 1)) * size);
     std::vector<double> displacement(static_cast<std::size_t>(L) * size), noise(displacement.size(), 0.0);
     Eigen::VectorXd lane_y(L), lane_f(L), recorded(L);
@@ -132,10 +135,13 @@ void run_linear_group(const Rig& rig, const Pid& base, const Eigen::VectorXd& pe
                                 &line[head * size], xy.data(), xv.data(), xi.data(), xf.data(), xs.data(),
                                 integral.data(), derivative.data(), e_prev.data(), kp.data(), ki_T.data(),
                                 kd_gain.data(), saturated.data(), peak.data()};
-            if (d > 0)
-                step_lanes<sensed, true>(lanes_now, lanes, map, a, limit, f);
+            // A limit or a clearance to watch is compiled in only when there is one.
+            if (checked)
+                d > 0 ? step_lanes<sensed, true, true>(lanes_now, lanes, map, a, limit, f)
+                      : step_lanes<sensed, false, true>(lanes_now, lanes, map, a, limit, f);
             else
-                step_lanes<sensed, false>(lanes_now, lanes, map, a, limit, f);
+                d > 0 ? step_lanes<sensed, true, false>(lanes_now, lanes, map, a, limit, f)
+                      : step_lanes<sensed, false, false>(lanes_now, lanes, map, a, limit, f);
             if (d > 0 && ++head == static_cast<std::size_t>(d)) head = 0;
         }
         transducer.record(period_force.data(), L, recorded.data());
