@@ -175,3 +175,14 @@ def test_bad_option_values_are_refused_by_the_parser(tmp_path) -> None:
     help_text = run_cli("run", "--help", cwd=tmp_path).stdout
     for unit in ("A/m", "A/(m s)", "A s/m", "Hz", "kg", "m rms"):
         assert unit in help_text
+
+
+def test_figures_are_reachable_from_the_package(study) -> None:
+    pytest.importorskip("matplotlib")
+    fig = af.plot_actual(study.estimate)
+    assert [ax.get_ylabel() for ax in fig.axes] == ["stiffness k (kN/m)", "damping c (N s/m)"]
+    assert fig.axes[-1].get_xlabel() == "frequency (Hz)" and fig.axes[0].get_xscale() == "log"
+    fig = af.plot_family(study.families["kd"], "kd")
+    assert len(fig.axes[0].get_legend().get_texts()) == 3
+    with pytest.raises(AttributeError):
+        af.plot_nothing  # noqa: B018

@@ -32,6 +32,17 @@ from ._recording import Recording, load_recording, save_recording
 from ._simulate import Trace, simulate
 from ._sweep import SweepResult, load_sweep, sweep
 
+_PLOTS = ("plot_actual", "plot_coefficients", "plot_effective", "plot_estimate", "plot_family")
+
+
+def __getattr__(name: str):  # noqa: ANN202 - figures load matplotlib (the optional extra) on first use
+    if name in _PLOTS:
+        from . import plots
+
+        return getattr(plots, name)
+    raise AttributeError(f"module 'amb_fast' has no attribute {name!r}")
+
+
 try:
     __version__ = version("amb_fast")
 except PackageNotFoundError:  # pragma: no cover
@@ -56,6 +67,11 @@ __all__ = [
     "identify",
     "load_recording",
     "load_sweep",
+    "plot_actual",
+    "plot_coefficients",
+    "plot_effective",
+    "plot_estimate",
+    "plot_family",
     "predict",
     "run_experiment",
     "save_recording",
