@@ -56,6 +56,8 @@ def test_workers_and_executors_change_nothing(setup) -> None:
     same(serial, af.sweep(rig, pid, excitation, workers=2, chunk_size=4, **kwargs))
     with ThreadPoolExecutor(3) as pool:
         same(serial, af.sweep(rig, pid, excitation, executor=pool, chunk_size=5, **kwargs))
+        # Chunks that split across the core's own threads too.
+        same(serial, af.sweep(rig, pid, excitation, executor=pool, workers=2, chunk_size=9, **kwargs))
 
 
 def test_dask_local_cluster_gives_the_same_sweep(setup) -> None:

@@ -6,7 +6,7 @@ import json
 import os
 import sys
 from collections.abc import Sequence
-from concurrent.futures import Executor
+from concurrent.futures import Executor, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -226,14 +226,35 @@ def _grid(pid: PID, values: dict[str, ArrayLike | None], grid: str) -> tuple[dic
 
 
 def _run_chunk(
-    rig: Rig, pid: PID, excitation: Multisine, gains: np.ndarray, settle: np.ndarray, seeds: np.ndarray,
-    periods: int, window: int, workers: int,
+    rig: Rig, pid: PID, excitation: Multisine, gains: np.ndarray, seeds: np.ndarray, periods: int,
+    settle_periods: int | None, window: int, workers: int,
 ) -> dict[str, np.ndarray]:  # fmt: skip
-    """One batched core call (a unit of work for an executor; picklable arguments, numpy results)."""
-    plan, _ = _plan(excitation.harmonics, excitation.period_samples)
-    out = _core.run_sweep(rig._to_core(), pid._to_core(), excitation.samples, gains[:, 0].copy(), gains[:, 1].copy(),
-                          gains[:, 2].copy(), settle, seeds, periods, plan, window, workers)  # fmt: skip
-    return {name: np.array(getattr(out, name)) for name in _CORE_FIELDS}
+    """One unit of work, for a thread or any executor (picklable arguments, numpy results): the
+    stability check (an unstable point is flagged, never simulated), the settling time, then one
+    batched core call for the stable points."""
+    n = len(gains)
+    radius = spectral_radius(rig, pid, kp=gains[:, 0], ki=gains[:, 1], kd=gains[:, 2])
+    stable = radius < 1.0
+    if settle_periods is None:  # the rule of run_experiment, so every point reruns bit for bit
+        slowest = settling_radius(rig, pid, np.where(stable, radius, 0.0))
+        settle = np.where(stable, settle_periods_for(slowest, excitation.period_samples), 0)
+    else:
+        settle = np.full(n, settle_periods)
+    plan, unexcited = _plan(excitation.harmonics, excitation.period_samples)
+    lines = len(excitation.harmonics)
+    out: dict[str, np.ndarray] = {name: np.full((n, lines), np.nan) for name in _CORE_FIELDS[:-2]}
+    out["H"] = np.full((n, lines), np.nan + 0j)
+    out["unexcited_displacement"] = np.full((n, len(unexcited)), np.nan)
+    out["status"] = np.full(n, STATUS.index("unstable"), dtype=np.int32)
+    out["settle_periods"] = settle.astype(np.int64)
+    rows = np.flatnonzero(stable)
+    if rows.size:
+        kp, ki, kd = gains[rows].T.copy()
+        core = _core.run_sweep(rig._to_core(), pid._to_core(), excitation.samples, kp, ki, kd,
+                               out["settle_periods"][rows], seeds[rows], periods, plan, window, workers)  # fmt: skip
+        for name in _CORE_FIELDS:
+            out[name][rows] = np.asarray(getattr(core, name))
+    return out
 
 
 _CORE_FIELDS = ("H", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std", "unexcited_displacement", "status")
@@ -276,10 +297,11 @@ def sweep(
     is unstable are flagged and not simulated; the rest run in a batched C++ core, ``workers``
     threads per call (default: all cores), with the GIL released.
 
-    ``executor``: any :class:`concurrent.futures.Executor` (threads, processes, or a dask cluster's
-    ``client.get_executor()``); the grid is cut into chunks of ``chunk_size`` points, each run by the
-    batched core on a worker (one thread each unless ``workers`` is given), and the results come back
-    in grid order. ``progress``: a tqdm bar (default: when stderr is a terminal). ``seed`` fixes the
+    The grid is cut into chunks of ``chunk_size`` points (default: about eight per worker), each run
+    by the batched core: on ``workers`` threads here, or on ``executor``, any
+    :class:`concurrent.futures.Executor` (threads, processes, or a dask cluster's
+    ``client.get_executor()``; each chunk then uses ``workers`` core threads, default one). Results
+    come back in grid order. ``progress``: a tqdm bar (default: when stderr is a terminal). ``seed`` fixes the
     measurement noise; each point gets its own seed (see ``SweepResult.seeds``).
     """
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
@@ -290,48 +312,52 @@ def sweep(
     n = len(next(iter(points.values())))
     gains = np.column_stack([points.get(name, np.full(n, getattr(pid, name))) for name in SWEPT])
 
-    radius = spectral_radius(rig, pid, kp=gains[:, 0], ki=gains[:, 1], kd=gains[:, 2])
-    stable = radius < 1.0
-    if settle_periods is None:
-        slowest = settling_radius(rig, pid, np.where(stable, radius, 0.0))
-        settle = np.where(stable, settle_periods_for(slowest, excitation.period_samples), 0)
-    else:
-        settle = np.full(n, integer("settle_periods", settle_periods, 0), dtype=np.int64)
+    if settle_periods is not None:
+        settle_periods = integer("settle_periods", settle_periods, 0)
     seeds = point_seeds(seed_value(seed), n)
-    status = np.where(stable, "ok", "unstable").astype("<U9")
-
-    plan, unexcited = _plan(excitation.harmonics, excitation.period_samples)
-    lines, gaps = len(excitation.harmonics), len(unexcited)
-    results = {name: np.full((n, lines), np.nan + 0j if name == "H" else np.nan) for name in _CORE_FIELDS[:-2]}
-    results["unexcited_displacement"] = np.full((n, gaps), np.nan)
-
-    todo = np.flatnonzero(stable)
-    threads = workers if workers is not None else (1 if executor is not None else (os.cpu_count() or 1))
-    threads = integer("workers", threads, 1)
+    threads = integer("workers", workers if workers is not None else (os.cpu_count() or 1), 1)
     require(executor is None or callable(getattr(executor, "submit", None)), "executor", executor,
             "a concurrent.futures.Executor (with submit)")  # fmt: skip
-    if chunk_size is not None:
-        integer("chunk_size", chunk_size, 1)
     require(progress in (None, True, False), "progress", progress, "True, False or None")
-    size = chunk_size or max(128 * threads, int(np.ceil(todo.size / 16)))  # few calls, some progress
-    chunks = [todo[i : i + size] for i in range(0, todo.size, size)]
-    args = lambda rows: (rig, pid, excitation, gains[rows], settle[rows], seeds[rows], periods, window, threads)  # noqa: E731
-    bar = _progress_bar(progress, int(todo.size))
+    size = integer("chunk_size", chunk_size, 1) if chunk_size is not None else max(32, -(-n // (8 * threads)))
+    chunks = [np.arange(i, min(i + size, n)) for i in range(0, n, size)]
+    # Threads here (the core releases the GIL), or the executor's workers with `workers` core
+    # threads per chunk (default one).
+    core_threads = workers if (executor is not None and workers is not None) else 1
+    run_on: Executor = executor if executor is not None else ThreadPoolExecutor(threads)
+    _, unexcited = _plan(excitation.harmonics, excitation.period_samples)
+    results: dict[str, np.ndarray] = {}
+    bar = _progress_bar(progress, n)
     try:
-        if executor is None:
-            outputs = (_run_chunk(*args(rows)) for rows in chunks)
-        else:
-            futures = [executor.submit(_run_chunk, *args(rows)) for rows in chunks]
-            outputs = (future.result() for future in futures)
-        for rows, out in zip(chunks, outputs):
-            for name in results:
-                results[name][rows] = out[name]
-            status[rows] = np.array(STATUS)[out["status"]]
+        futures = [
+            run_on.submit(
+                _run_chunk,
+                rig,
+                pid,
+                excitation,
+                gains[rows],
+                seeds[rows],
+                periods,
+                settle_periods,
+                window,
+                core_threads,
+            )  # fmt: skip
+            for rows in chunks
+        ]
+        for rows, future in zip(chunks, futures):
+            for name, values in future.result().items():
+                if name not in results:
+                    results[name] = np.empty((n, *values.shape[1:]), dtype=values.dtype)
+                results[name][rows] = values
             if bar is not None:
                 bar.update(rows.size)
     finally:
+        if executor is None:
+            run_on.shutdown(cancel_futures=True)
         if bar is not None:
             bar.close()
+    status = np.array(STATUS)[results.pop("status")]
+    settle = results.pop("settle_periods")
 
     return SweepResult(
         points=points,
