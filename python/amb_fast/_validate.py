@@ -40,15 +40,6 @@ def series(name: str, values: Any) -> np.ndarray:
     return array
 
 
-def finite_series(name: str, values: Any) -> np.ndarray:
-    """A 1-D finite float64 array; a bad sample is named by its index."""
-    array = series(name, values)
-    bad = np.flatnonzero(~np.isfinite(array))
-    if bad.size:
-        raise ValueError(f"{name} must be finite, got {array[bad[0]]!r} at sample {bad[0]} ({bad.size} bad samples)")
-    return array
-
-
 def seed_value(seed: Any) -> int:
     """A 64-bit seed for the core's noise generator; ``None`` draws a fresh one."""
     if seed is None:

@@ -55,7 +55,6 @@ public:
     // platform reaches its clearance, std::overflow_error if the state stops being finite.
     void run(const double* force, Eigen::Index n, Channels out);
 
-    Eigen::Index samples_done() const { return k_; }
     // Samples at which the amplifier clipped the current command, since the start.
     Eigen::Index saturated_samples() const { return saturated_; }
 
