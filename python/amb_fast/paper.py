@@ -49,12 +49,11 @@ def write_curves(study: PaperStudy, out: Path) -> list[Path]:
     except ImportError:
         suffix = ".npz"
     for name, result in study.families.items():
-        rows = {f"{name}_{j}": result.points[name][j] for j in range(len(result.points[name]))}
         columns = {"freq_Hz": result.freq}
-        for j, key in enumerate(rows):
-            columns |= {f"k_smooth_N_per_m@{name}={rows[key]:g}": result.k_smooth[j],
-                        f"c_smooth_Ns_per_m@{name}={rows[key]:g}": result.c_smooth[j],
-                        f"receptance_abs_m_per_N@{name}={rows[key]:g}": np.abs(1 / result.H[j])}  # fmt: skip
+        for j, gain in enumerate(result.points[name]):
+            columns |= {f"k_smooth_N_per_m@{name}={gain:g}": result.k_smooth[j],
+                        f"c_smooth_Ns_per_m@{name}={gain:g}": result.c_smooth[j],
+                        f"receptance_abs_m_per_N@{name}={gain:g}": np.abs(1 / result.H[j])}  # fmt: skip
         path = out / f"family_{name}.csv"
         _write_csv(path, columns)
         result.save(out / f"family_{name}{suffix}")

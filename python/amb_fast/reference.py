@@ -50,13 +50,13 @@ def simulate(rig: Rig, pid: PID, force: np.ndarray) -> tuple[np.ndarray, np.ndar
         if rig.force_law == "linear":
             x = Phi @ x + Gamma @ np.array([f, i_cmd])
         else:
-            x = _rk4_sample(rig, states, x, f, i_cmd, T)
+            x = _rk4_sample(rig, A, B, states, x, f, i_cmd, T)
     return displacement, current
 
 
-def _rk4_sample(rig: Rig, states: list[str], x: np.ndarray, f: float, i_cmd: float, T: float) -> np.ndarray:
-    A, B, _ = plant_matrices(rig)
-
+def _rk4_sample(
+    rig: Rig, A: np.ndarray, B: np.ndarray, states: list[str], x: np.ndarray, f: float, i_cmd: float, T: float
+) -> np.ndarray:
     def rhs(x: np.ndarray) -> np.ndarray:
         # The linear matrices carry the lags; the magnet force replaces the linear force on v.
         dx = A @ x + B @ np.array([f, i_cmd])
