@@ -79,7 +79,7 @@ def test_zip_grid_and_validation(setup) -> None:
         af.sweep(rig, pid, excitation, kp=[1.0, 2.0], ki=[1.0], grid="zip")
     with pytest.raises(ValueError, match="kp must be finite"):
         af.sweep(rig, pid, excitation, kp=[2000.0, np.nan])
-    with pytest.raises(ValueError, match="at least one of them"):
+    with pytest.raises(ValueError, match="at least one swept parameter"):
         af.sweep(rig, pid, excitation)
     with pytest.raises(ValueError, match="grid must be"):
         af.sweep(rig, pid, excitation, kp=[2000.0], grid="cartesian")

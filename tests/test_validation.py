@@ -65,10 +65,16 @@ def test_core_rig_rejects_as_second_line_of_defence(name, value) -> None:
         _core.Rig(**{**CORE_RIG, name: value})
 
 
-@pytest.mark.parametrize(("name", "value"), [("fs", 0.0), ("kp", math.nan), ("delay", -1)])
-def test_core_pid_rejects_as_second_line_of_defence(name, value) -> None:
-    with pytest.raises(ValueError, match=rf"^{name} must be .*got"):
-        _core.Pid(**{**CORE_PID, name: value})
+@pytest.mark.parametrize(
+    ("name", "value", "message"),
+    [("fs", 0.0, "fs must be"), ("D", math.nan, "controller D must be finite"), ("delay", -1, "delay must be"),
+     ("A", np.full((1, 1), np.inf), "controller matrices must be finite"),
+     ("A", np.zeros((25, 25)), "controller order must be at most 24")],
+)  # fmt: skip
+def test_core_controller_rejects_as_second_line_of_defence(name, value, message) -> None:
+    fields = dict(A=np.eye(1), B=np.ones(1), C=np.ones(1), D=1.0, fs=4000.0, delay=0)
+    with pytest.raises(ValueError, match=rf"^{message}.*got"):
+        _core.Controller(**{**fields, name: value})
 
 
 @pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])

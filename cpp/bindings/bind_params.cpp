@@ -30,13 +30,17 @@ void bind_params(py::module_& m) {
              "Non-linear magnet-pair force on the platform (N) at displacement y (m) and current i (A).")
         .def_property_readonly("gap", &Rig::gap, "Nominal air gap of the force law (m).");
 
-    py::class_<Pid>(m, "Pid", "Digital PID: gains in A/m, A/(m s), A s/m; cutoff and fs in Hz; delay in samples.")
-        .def(py::init([](double kp, double ki, double kd, std::optional<double> derivative_cutoff, double fs,
-                         int delay) {
-                 Pid pid{kp, ki, kd, derivative_cutoff, fs, delay};
-                 pid.validate();
-                 return pid;
+    py::class_<Controller>(m, "Controller",
+                           "Digital controller: s[k+1] = A s + B e, u = C s + D e (e in m, u in A), at fs (Hz), "
+                           "applied `delay` whole samples later.")
+        .def(py::init([](const Eigen::MatrixXd& A, const Eigen::VectorXd& B, const Eigen::VectorXd& C, double D,
+                         double fs, int delay) {
+                 Controller c{A, B, C, D, fs, delay};
+                 c.validate();
+                 return c;
              }),
-             py::kw_only(), py::arg("kp"), py::arg("ki"), py::arg("kd"), py::arg("derivative_cutoff"),
-             py::arg("fs"), py::arg("delay"));
+             py::kw_only(), py::arg("A"), py::arg("B"), py::arg("C"), py::arg("D"), py::arg("fs"), py::arg("delay"))
+        .def_property_readonly("order", &Controller::order, "Number of controller states.")
+        .def_readonly("fs", &Controller::fs)
+        .def_readonly("delay", &Controller::delay);
 }

@@ -33,7 +33,7 @@ void bind_spectrum(py::module_& m) {
         .def_readonly("blocks", &LineEstimate::blocks)
         .def_readonly("saturated_samples", &LineEstimate::saturated_samples);
 
-    m.def("run_experiment", &run_experiment, py::arg("rig"), py::arg("pid"), py::arg("period_force"),
+    m.def("run_experiment", &run_experiment, py::arg("rig"), py::arg("controller"), py::arg("period_force"),
           py::arg("settle_periods"), py::arg("periods"), py::arg("plan"), py::arg("seed"), py::arg("median_window"),
           py::call_guard<py::gil_scoped_release>(),
           "Simulates settle + periods of the repeated excitation and estimates, keeping no time series.");

@@ -28,23 +28,24 @@ void bind_sweep(py::module_& m) {
 
     m.def(
         "run_sweep",
-        [](const Rig& rig, const Pid& base, const Eigen::Ref<const Eigen::VectorXd>& period_force,
-           const Eigen::Ref<const Eigen::VectorXd>& kp, const Eigen::Ref<const Eigen::VectorXd>& ki,
-           const Eigen::Ref<const Eigen::VectorXd>& kd,
+        [](const Eigen::Ref<const Eigen::VectorXd>& period_force, const std::vector<Rig>& rigs,
+           const std::vector<Controller>& controllers,
            const Eigen::Ref<const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>>& settle_periods,
            const Eigen::Ref<const Eigen::Matrix<std::uint64_t, Eigen::Dynamic, 1>>& seeds, Eigen::Index periods,
            const LinePlan& plan, int median_window, int workers) {
-            const Eigen::Index n = kp.size();
-            if (ki.size() != n || kd.size() != n || settle_periods.size() != n || seeds.size() != n)
-                throw std::invalid_argument("kp, ki, kd, settle_periods and seeds must have one entry per point");
-            std::vector<GainPoint> points(static_cast<std::size_t>(n));
-            for (Eigen::Index g = 0; g < n; ++g)
-                points[static_cast<std::size_t>(g)] = {kp[g], ki[g], kd[g], settle_periods[g], seeds[g]};
+            const auto n = static_cast<Eigen::Index>(controllers.size());
+            if (static_cast<Eigen::Index>(rigs.size()) != n || settle_periods.size() != n || seeds.size() != n)
+                throw std::invalid_argument("rigs, controllers, settle_periods and seeds must have one entry per point");
+            std::vector<SweepPoint> points;
+            points.reserve(static_cast<std::size_t>(n));
+            for (Eigen::Index g = 0; g < n; ++g) {
+                const auto k = static_cast<std::size_t>(g);
+                points.push_back({rigs[k], controllers[k], settle_periods[g], seeds[g]});
+            }
             py::gil_scoped_release release;
-            return run_sweep(rig, base, period_force, points, periods, plan, median_window, workers);
+            return run_sweep(period_force, points, periods, plan, median_window, workers);
         },
-        py::arg("rig"), py::arg("pid"), py::arg("period_force"), py::arg("kp"), py::arg("ki"), py::arg("kd"),
-        py::arg("settle_periods"), py::arg("seeds"), py::arg("periods"), py::arg("plan"), py::arg("median_window"),
-        py::arg("workers"),
-        "Runs one experiment per gain set on `workers` threads (<= 0: all cores), GIL released.");
+        py::arg("period_force"), py::arg("rigs"), py::arg("controllers"), py::arg("settle_periods"), py::arg("seeds"),
+        py::arg("periods"), py::arg("plan"), py::arg("median_window"), py::arg("workers"),
+        "Runs one experiment per point (rig, controller) on `workers` threads (<= 0: all cores), GIL released.");
 }

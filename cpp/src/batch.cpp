@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <exception>
 #include <limits>
-#include <random>
 #include <stdexcept>
 #include <thread>
 
@@ -34,183 +33,223 @@ void store(SweepEstimates& out, Eigen::Index row, const LineEstimate& e) {
     out.status[row] = static_cast<int>(PointStatus::ok);
 }
 
-Pid with_gains(const Pid& base, const GainPoint& g) {
-    Pid pid = base;
-    pid.kp = g.kp;
-    pid.ki = g.ki;
-    pid.kd = g.kd;
-    return pid;
+// Points that can share lock step: the same rig (so the same plant map, transducer and noise levels),
+// and controllers of the same capacity, delay and sample rate.
+bool same_group(const SweepPoint& a, const SweepPoint& b) {
+    return a.rig == b.rig && controller_capacity(a.controller.order()) == controller_capacity(b.controller.order()) &&
+           a.controller.delay == b.controller.delay && a.controller.fs == b.controller.fs;
 }
 
-// Pointers to one sample's slice of the lane arrays.
-struct LaneState {
-    double* out_y;
-    const double* noise;
-    double* held;  // this sample's slot of the delay line
-    double *y, *v, *i, *f, *s, *integral, *derivative, *e_prev;
-    const double *kp, *ki_T, *kd_gain;
-    double *saturated, *peak;  // clipped samples; largest |y| so far
+// Lane arrays, structure of arrays: entry c of lane g at c * lanes + g.
+struct Lanes {
+    Lanes(Eigen::Index lanes, int N, int delay)
+        : n(static_cast<std::size_t>(lanes)),
+          y(n), v(n), i(n), f(n), s(n), e(n), u(n), cs(n), acc(n), saturated(n), peak(n),
+          state(n * static_cast<std::size_t>(N)), next(state.size()), A(n * static_cast<std::size_t>(N * N)),
+          B(state.size()), C(state.size()), D(n), held(n * static_cast<std::size_t>(std::max(delay, 1))) {}
+    std::size_t n;
+    std::vector<double> y, v, i, f, s, e, u, cs, acc, saturated, peak;  // plant state, e, u, scratch
+    std::vector<double> state, next, A, B, C, D, held;                // controller state, coefficients, delay line
 };
 
-// One sample for every lane: what Loop::run_linear does for one loop, branch-free so it vectorises.
-template <int sensed, bool delayed, bool checked>
-void step_lanes(const LaneState& st, Eigen::Index lanes, const CascadeMap& map, double a, double limit, double force) {
-    double* __restrict out_y = st.out_y;
-    const double* __restrict noise = st.noise;
-    double* __restrict held = st.held;
-    double* __restrict y = st.y;
-    double* __restrict v = st.v;
-    double* __restrict i = st.i;
-    double* __restrict f = st.f;
-    double* __restrict s = st.s;
-    double* __restrict I = st.integral;
-    double* __restrict D = st.derivative;
-    double* __restrict E = st.e_prev;
-    double* __restrict saturated = st.saturated;
-    double* __restrict peak = st.peak;
-    for (Eigen::Index g = 0; g < lanes; ++g) {
-        const double e = (sensed == state::ys ? s[g] : y[g]) + noise[g];
-        double u = PidLaw::apply(st.kp[g], st.ki_T[g], st.kd_gain[g], a, e, I[g], D[g], E[g]);
-        if constexpr (delayed) {  // u[k - d] out, u[k] in
+// One sample for every lane: what Loop::run_linear does for one loop (the same ControlLaw operations in
+// the same order, the same CascadeMap), as passes over the lanes that vectorise.
+template <int N, int sensed, bool delayed, bool checked>
+void step_lanes(Lanes& L, std::size_t head, const double* __restrict noise, double* __restrict out_y,
+                const CascadeMap& map, double limit, double force) {
+    const std::size_t n = L.n;
+    double* __restrict e = L.e.data();
+    double* __restrict u = L.u.data();
+    double* __restrict cs = L.cs.data();
+    double* __restrict acc = L.acc.data();
+    double* __restrict s = L.state.data();
+    double* __restrict next = L.next.data();
+    const double* __restrict A = L.A.data();
+    const double* __restrict B = L.B.data();
+    const double* __restrict C = L.C.data();
+    const double* __restrict D = L.D.data();
+    const double* __restrict measured = sensed == state::ys ? L.s.data() : L.y.data();
+    for (std::size_t g = 0; g < n; ++g) e[g] = measured[g] + noise[g];
+    for (std::size_t g = 0; g < n; ++g) cs[g] = C[g] * s[g];
+    for (int j = 1; j < N; ++j)
+        for (std::size_t g = 0; g < n; ++g) cs[g] += C[j * n + g] * s[j * n + g];
+    for (int r = 0; r < N; ++r) {
+        for (std::size_t g = 0; g < n; ++g) acc[g] = A[(r * N) * n + g] * s[g];
+        for (int j = 1; j < N; ++j)
+            for (std::size_t g = 0; g < n; ++g) acc[g] += A[(r * N + j) * n + g] * s[j * n + g];
+        for (std::size_t g = 0; g < n; ++g) next[r * n + g] = acc[g] + B[r * n + g] * e[g];
+    }
+    std::copy(L.next.begin(), L.next.end(), L.state.begin());
+    for (std::size_t g = 0; g < n; ++g) u[g] = cs[g] + D[g] * e[g];
+    if constexpr (delayed) {  // u[k - d] out, u[k] in
+        double* __restrict held = L.held.data() + head * n;
+        for (std::size_t g = 0; g < n; ++g) {
             const double older = held[g];
-            held[g] = u;
-            u = older;
+            held[g] = u[g];
+            u[g] = older;
         }
+    }
+    double* __restrict y = L.y.data();
+    double* __restrict v = L.v.data();
+    double* __restrict i = L.i.data();
+    double* __restrict f = L.f.data();
+    double* __restrict ys = L.s.data();
+    double* __restrict saturated = L.saturated.data();
+    double* __restrict peak = L.peak.data();
+    for (std::size_t g = 0; g < n; ++g) {
         if constexpr (checked) {  // the amplifier's limit, as in Loop::run_linear
-            const double wanted = u;
-            u = std::clamp(wanted, -limit, limit);
-            saturated[g] += u != wanted;
+            const double wanted = u[g];
+            u[g] = std::clamp(wanted, -limit, limit);
+            saturated[g] += u[g] != wanted;
         }
-        out_y[g] = e;
-        map.advance(y[g], v[g], i[g], f[g], s[g], force, u);
+        out_y[g] = e[g];
+        map.advance(y[g], v[g], i[g], f[g], ys[g], force, u[g]);
         if constexpr (checked) peak[g] = std::max(peak[g], std::abs(y[g]));
     }
 }
 
-// A group of linear points in lock step. Per sample, the inner loop over lanes does for each lane
-// what Loop::run_linear does for one (same PidLaw, same CascadeMap), so the numbers are identical.
-template <int sensed>
-void run_linear_group(const Rig& rig, const Pid& base, const Eigen::VectorXd& period_force, const GainPoint* points,
-                      Eigen::Index lanes, Eigen::Index periods, const LinePlan& plan, int median_window,
-                      SweepEstimates& out, Eigen::Index first_row) {
+// A group of linear points in lock step (one rig; controllers of one capacity N and one delay).
+template <int N, int sensed>
+void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* points, Eigen::Index lanes,
+                      Eigen::Index periods, const LinePlan& plan, int median_window, SweepEstimates& out,
+                      Eigen::Index first_row) {
+    const Rig& rig = points[0].rig;
+    const Controller& first = points[0].controller;
     const Eigen::Index L = period_force.size();
-    const CascadeMap map(propagator(rig, base.period()));
-    const Eigen::Index d = base.delay;
-    const double a = PidLaw(base).a;
+    const CascadeMap map(propagator(rig, first.period()));
+    const int d = first.delay;
+    Lanes lane(lanes, N, d);
+    const std::size_t n = lane.n;
     std::vector<PeriodEstimator> estimators;
-    std::vector<std::mt19937_64> sensor_rng, force_rng;
-    std::vector<std::normal_distribution<double>> sensor_normal(lanes), force_normal(lanes);
-    // Lane state and gains, structure of arrays, so the lane loop vectorises.
-    const auto size = static_cast<std::size_t>(lanes);
-    std::vector<double> kp(size), ki_T(size), kd_gain(size);
-    std::vector<double> xy(size), xv(size), xi(size), xf(size), xs(size), integral(size), derivative(size), e_prev(size);
-    std::vector<double> saturated(size), saturated_before(size), peak(size);
+    std::vector<NormalStream> sensor_noise, force_noise;
+    std::vector<double> saturated_before(n);
+    for (Eigen::Index g = 0; g < lanes; ++g) {
+        const ControlLaw<N> law(points[g].controller);
+        for (int r = 0; r < N; ++r) {
+            lane.B[r * n + g] = law.B[r], lane.C[r * n + g] = law.C[r];
+            for (int j = 0; j < N; ++j) lane.A[(r * N + j) * n + g] = law.A[r * N + j];
+        }
+        lane.D[g] = law.D;
+    }
     const double limit = rig.command_limit(), touchdown = rig.touchdown_at();
     const bool checked = std::isfinite(limit) || std::isfinite(touchdown);
-    std::vector<double> line(static_cast<std::size_t>(std::max<Eigen::Index>(d, 1)) * size);
-    std::vector<double> displacement(static_cast<std::size_t>(L) * size), noise(displacement.size(), 0.0);
-    Eigen::VectorXd lane_y(L), lane_f(L), recorded(L);
-    ForceTransducer transducer(rig, base.period());  // sees the same force in every lane
+    std::vector<double> displacement(static_cast<std::size_t>(L) * n), noise(displacement.size(), 0.0);
+    Eigen::VectorXd lane_y(L), lane_f(L), recorded(L), draws(L);
+    ForceTransducer transducer(rig, first.period());  // sees the same force in every lane
     Eigen::Index last = 0;
-    estimators.reserve(size);
+    estimators.reserve(n);
     for (Eigen::Index g = 0; g < lanes; ++g) {
-        const PidLaw law(with_gains(base, points[g]));
-        kp[g] = law.kp, ki_T[g] = law.ki_T, kd_gain[g] = law.kd_gain;
         estimators.emplace_back(plan);
-        sensor_rng.emplace_back(points[g].seed);
-        force_rng.emplace_back(points[g].seed ^ 0x9e3779b97f4a7c15ULL);
+        sensor_noise.emplace_back(points[g].seed);
+        force_noise.emplace_back(points[g].seed ^ 0x9e3779b97f4a7c15ULL);
         last = std::max(last, points[g].settle_periods + periods);
     }
-    std::vector<bool> touched(size, false);
+    std::vector<bool> touched(n, false);
     std::size_t head = 0;
 
     for (Eigen::Index p = 0; p < last; ++p) {
         if (rig.sensor_noise > 0.0)
-            for (Eigen::Index g = 0; g < lanes; ++g)
-                for (Eigen::Index j = 0; j < L; ++j)
-                    noise[static_cast<std::size_t>(j * lanes + g)] = rig.sensor_noise * sensor_normal[g](sensor_rng[g]);
+            for (std::size_t g = 0; g < n; ++g) {
+                sensor_noise[g].fill(draws.data(), L, rig.sensor_noise);
+                for (Eigen::Index j = 0; j < L; ++j) noise[static_cast<std::size_t>(j) * n + g] = draws[j];
+            }
         for (Eigen::Index j = 0; j < L; ++j) {
             const double f = period_force[j];
-            LaneState lanes_now{&displacement[static_cast<std::size_t>(j * lanes)], &noise[static_cast<std::size_t>(j * lanes)],
-                                &line[head * size], xy.data(), xv.data(), xi.data(), xf.data(), xs.data(),
-                                integral.data(), derivative.data(), e_prev.data(), kp.data(), ki_T.data(),
-                                kd_gain.data(), saturated.data(), peak.data()};
+            const double* noise_now = &noise[static_cast<std::size_t>(j) * n];
+            double* out_y = &displacement[static_cast<std::size_t>(j) * n];
             // A limit or a clearance to watch is compiled in only when there is one.
             if (checked)
-                d > 0 ? step_lanes<sensed, true, true>(lanes_now, lanes, map, a, limit, f)
-                      : step_lanes<sensed, false, true>(lanes_now, lanes, map, a, limit, f);
+                d > 0 ? step_lanes<N, sensed, true, true>(lane, head, noise_now, out_y, map, limit, f)
+                      : step_lanes<N, sensed, false, true>(lane, head, noise_now, out_y, map, limit, f);
             else
-                d > 0 ? step_lanes<sensed, true, false>(lanes_now, lanes, map, a, limit, f)
-                      : step_lanes<sensed, false, false>(lanes_now, lanes, map, a, limit, f);
+                d > 0 ? step_lanes<N, sensed, true, false>(lane, head, noise_now, out_y, map, limit, f)
+                      : step_lanes<N, sensed, false, false>(lane, head, noise_now, out_y, map, limit, f);
             if (d > 0 && ++head == static_cast<std::size_t>(d)) head = 0;
         }
         transducer.record(period_force.data(), L, recorded.data());
-        for (Eigen::Index g = 0; g < lanes; ++g) {
-            if (p == points[g].settle_periods) saturated_before[g] = saturated[g];
+        for (std::size_t g = 0; g < n; ++g) {
+            if (p == points[g].settle_periods) saturated_before[g] = lane.saturated[g];
             // A single run stops at touchdown; the lane runs on, but records no more.
-            if (peak[g] >= touchdown) touched[g] = true;
+            if (lane.peak[g] >= touchdown) touched[g] = true;
             const bool recording =
                 !touched[g] && p >= points[g].settle_periods && p < points[g].settle_periods + periods;
             lane_f = recorded;
-            if (rig.force_noise > 0.0)  // drawn whether recorded or not, as a single run draws it
-                for (Eigen::Index j = 0; j < L; ++j) lane_f[j] += rig.force_noise * force_normal[g](force_rng[g]);
+            if (rig.force_noise > 0.0) {  // drawn whether recorded or not, as a single run draws it
+                force_noise[g].fill(draws.data(), L, rig.force_noise);
+                lane_f += draws;
+            }
             if (!recording) continue;
-            for (Eigen::Index j = 0; j < L; ++j) lane_y[j] = displacement[static_cast<std::size_t>(j * lanes + g)];
-            if (recording) estimators[g].add_period(lane_f.data(), lane_y.data(), p * L);
+            for (Eigen::Index j = 0; j < L; ++j) lane_y[j] = displacement[static_cast<std::size_t>(j) * n + g];
+            estimators[g].add_period(lane_f.data(), lane_y.data(), p * L);
         }
     }
-    for (Eigen::Index g = 0; g < lanes; ++g) {
+    for (std::size_t g = 0; g < n; ++g) {
+        const auto row = first_row + static_cast<Eigen::Index>(g);
         if (touched[g]) {
-            out.status[first_row + g] = static_cast<int>(PointStatus::touchdown);
+            out.status[row] = static_cast<int>(PointStatus::touchdown);
             continue;
         }
-        if (!std::isfinite(xy[g] + xv[g] + xi[g] + xf[g] + xs[g]))
+        if (!std::isfinite(lane.y[g] + lane.v[g] + lane.i[g] + lane.f[g] + lane.s[g]))
             throw std::overflow_error("a point of the sweep diverged although its linearised loop is stable");
-        LineEstimate e = estimators[g].estimate(rig.mass, base.fs, median_window);
-        e.saturated_samples = static_cast<Eigen::Index>(saturated[g] - saturated_before[g]);
-        store(out, first_row + g, e);
+        LineEstimate e = estimators[g].estimate(rig.mass, first.fs, median_window);
+        e.saturated_samples = static_cast<Eigen::Index>(lane.saturated[g] - saturated_before[g]);
+        store(out, row, e);
     }
 }
 
-void run_points(const Rig& rig, const Pid& base, const Eigen::VectorXd& period_force, const GainPoint* points,
-                Eigen::Index count, Eigen::Index periods, const LinePlan& plan, int median_window, SweepEstimates& out,
-                Eigen::Index first_row) {
-    if (rig.force_law == ForceLaw::nonlinear) {
-        for (Eigen::Index g = 0; g < count; ++g) {
+template <int N>
+void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* points, Eigen::Index lanes,
+                      Eigen::Index periods, const LinePlan& plan, int median_window, SweepEstimates& out,
+                      Eigen::Index first_row) {
+    if (points[0].rig.sensor_bandwidth)
+        run_linear_group<N, state::ys>(period_force, points, lanes, periods, plan, median_window, out, first_row);
+    else
+        run_linear_group<N, state::y>(period_force, points, lanes, periods, plan, median_window, out, first_row);
+}
+
+void run_points(const Eigen::VectorXd& period_force, const SweepPoint* points, Eigen::Index count, Eigen::Index periods,
+                const LinePlan& plan, int median_window, SweepEstimates& out, Eigen::Index first_row) {
+    Eigen::Index start = 0;
+    while (start < count) {
+        const SweepPoint& head = points[start];
+        if (head.rig.force_law == ForceLaw::nonlinear) {
             try {
-                store(out, first_row + g,
-                      run_experiment(rig, with_gains(base, points[g]), period_force, points[g].settle_periods, periods,
-                                     plan, points[g].seed, median_window));
+                store(out, first_row + start,
+                      run_experiment(head.rig, head.controller, period_force, head.settle_periods, periods, plan,
+                                     head.seed, median_window));
             } catch (const Touchdown&) {
-                out.status[first_row + g] = static_cast<int>(PointStatus::touchdown);
+                out.status[first_row + start] = static_cast<int>(PointStatus::touchdown);
             }
+            ++start;
+            continue;
         }
-        return;
-    }
-    for (Eigen::Index start = 0; start < count; start += lanes_per_group) {
-        const Eigen::Index lanes = std::min(lanes_per_group, count - start);
-        if (rig.sensor_bandwidth)
-            run_linear_group<state::ys>(rig, base, period_force, points + start, lanes, periods, plan, median_window,
-                                        out, first_row + start);
-        else
-            run_linear_group<state::y>(rig, base, period_force, points + start, lanes, periods, plan, median_window,
-                                       out, first_row + start);
+        Eigen::Index lanes = 1;
+        while (lanes < lanes_per_group && start + lanes < count && same_group(head, points[start + lanes])) ++lanes;
+        const SweepPoint* group = points + start;
+        const Eigen::Index row = first_row + start;
+        switch (controller_capacity(head.controller.order())) {
+            case 4: run_linear_group<4>(period_force, group, lanes, periods, plan, median_window, out, row); break;
+            case 8: run_linear_group<8>(period_force, group, lanes, periods, plan, median_window, out, row); break;
+            case 16: run_linear_group<16>(period_force, group, lanes, periods, plan, median_window, out, row); break;
+            default: run_linear_group<24>(period_force, group, lanes, periods, plan, median_window, out, row); break;
+        }
+        start += lanes;
     }
 }
 
 }  // namespace
 
-SweepEstimates run_sweep(const Rig& rig, const Pid& base, const Eigen::Ref<const Eigen::VectorXd>& period_force,
-                         const std::vector<GainPoint>& points, Eigen::Index periods, LinePlan plan, int median_window,
-                         int workers) {
-    rig.validate();
-    base.validate();
+SweepEstimates run_sweep(const Eigen::Ref<const Eigen::VectorXd>& period_force, const std::vector<SweepPoint>& points,
+                         Eigen::Index periods, LinePlan plan, int median_window, int workers) {
     const Eigen::Index L = plan.period;
     require(period_force.size() == L, "excitation length", period_force.size(), "one period of plan.period samples");
     require_finite_samples("excitation", period_force.data(), L);
     require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
-    for (const GainPoint& g : points) {
-        with_gains(base, g).validate();
+    for (const SweepPoint& g : points) {
+        g.rig.validate();
+        g.controller.validate();
+        require(g.controller.fs == points.front().controller.fs, "fs", g.controller.fs, "the same at every point (Hz)");
+        require(g.rig.mass == points.front().rig.mass, "mass", g.rig.mass, "the same at every point (kg)");
         require(g.settle_periods >= 0, "settle_periods", g.settle_periods, ">= 0");
     }
     plan.periods_per_block = periods_per_block(periods);
@@ -239,8 +278,7 @@ SweepEstimates run_sweep(const Rig& rig, const Pid& base, const Eigen::Ref<const
         const Eigen::Index begin = n * w / workers, end = n * (w + 1) / workers;
         threads.emplace_back([&, w, begin, end] {
             try {
-                run_points(rig, base, force, points.data() + begin, end - begin, periods, plan, median_window, out,
-                           begin);
+                run_points(force, points.data() + begin, end - begin, periods, plan, median_window, out, begin);
             } catch (...) {
                 errors[static_cast<std::size_t>(w)] = std::current_exception();
             }

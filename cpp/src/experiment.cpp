@@ -6,7 +6,7 @@
 
 namespace amb_fast {
 
-LineEstimate run_experiment(const Rig& rig, const Pid& pid, const Eigen::Ref<const Eigen::VectorXd>& period_force,
+LineEstimate run_experiment(const Rig& rig, const Controller& controller, const Eigen::Ref<const Eigen::VectorXd>& period_force,
                             Eigen::Index settle_periods, Eigen::Index periods, LinePlan plan, std::uint64_t seed,
                             int median_window) {
     const Eigen::Index L = plan.period;
@@ -15,7 +15,7 @@ LineEstimate run_experiment(const Rig& rig, const Pid& pid, const Eigen::Ref<con
     require(settle_periods >= 0, "settle_periods", settle_periods, ">= 0");
     require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
     plan.periods_per_block = periods_per_block(periods);
-    Loop loop(rig, pid, seed);
+    Loop loop(rig, controller, seed);
     PeriodEstimator estimator(plan);
     Eigen::VectorXd force(L), displacement(L), current(L);
     Eigen::Index saturated_before_recording = 0;
@@ -24,7 +24,7 @@ LineEstimate run_experiment(const Rig& rig, const Pid& pid, const Eigen::Ref<con
         loop.run(period_force.data(), L, {force.data(), displacement.data(), current.data()});
         if (p >= settle_periods) estimator.add_period(force.data(), displacement.data(), p * L);
     }
-    LineEstimate estimate = estimator.estimate(rig.mass, pid.fs, median_window);
+    LineEstimate estimate = estimator.estimate(rig.mass, controller.fs, median_window);
     estimate.saturated_samples = loop.saturated_samples() - saturated_before_recording;
     return estimate;
 }

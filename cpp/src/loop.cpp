@@ -9,10 +9,10 @@
 
 namespace amb_fast {
 
-Loop::Loop(const Rig& rig, const Pid& pid, std::uint64_t seed)
+Loop::Loop(const Rig& rig, const Controller& controller, std::uint64_t seed)
     : rig_(validated(rig)),
-      pid_(validated(pid)),
-      T_(pid.period()),
+      controller_(controller),
+      T_(controller.period()),
       sensed_(rig.sensor_bandwidth ? state::ys : state::y),
       has_amp_(rig.amp_bandwidth.has_value()),
       drive_(force_current_index(rig)),
@@ -21,7 +21,7 @@ Loop::Loop(const Rig& rig, const Pid& pid, std::uint64_t seed)
       touchdown_(rig.touchdown_at()),
       sensor_rng_(seed),
       force_rng_(seed ^ 0x9e3779b97f4a7c15ULL),
-      transducer_(rig, pid.period()) {
+      transducer_(rig, controller.period()) {
     if (rig_.force_law == ForceLaw::linear) {
         map_.emplace(propagator(rig_, T_));
     } else {
@@ -35,16 +35,17 @@ void Loop::run(const double* force, Eigen::Index n, Channels out) {
     for (Eigen::Index start = 0; start < n; start += chunk) {
         const Eigen::Index m = std::min(chunk, n - start);
         const Channels part{out.force + start, out.displacement + start, out.current + start};
-        if (rig_.sensor_noise > 0.0)
-            for (Eigen::Index j = 0; j < m; ++j) sensor_noise_[j] = rig_.sensor_noise * sensor_normal_(sensor_rng_);
+        if (rig_.sensor_noise > 0.0) sensor_rng_.fill(sensor_noise_.data(), m, rig_.sensor_noise);
         const double* noise = sensor_noise_.data();
         if (rig_.force_law == ForceLaw::nonlinear)
             run_nonlinear(force + start, m, part, noise);
         else
             run_linear(force + start, m, part, noise);
         transducer_.record(force + start, m, part.force);
-        if (rig_.force_noise > 0.0)
-            for (Eigen::Index j = 0; j < m; ++j) part.force[j] += rig_.force_noise * force_normal_(force_rng_);
+        if (rig_.force_noise > 0.0) {
+            force_rng_.fill(force_noise_.data(), m, rig_.force_noise);
+            for (Eigen::Index j = 0; j < m; ++j) part.force[j] += force_noise_[j];
+        }
         k_ += m;
     }
 }
@@ -53,32 +54,43 @@ void Loop::run(const double* force, Eigen::Index n, Channels out) {
 // clearance is to be watched are compile-time constants in the kernel, so the state stays in
 // registers and the common case pays for no checks.
 void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise) {
+    switch (controller_.capacity()) {
+        case 4: return run_linear<4>(force, n, out, noise);
+        case 8: return run_linear<8>(force, n, out, noise);
+        case 16: return run_linear<16>(force, n, out, noise);
+        default: return run_linear<24>(force, n, out, noise);
+    }
+}
+
+template <int N>
+void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise) {
     const bool checked = std::isfinite(limit_) || std::isfinite(touchdown_);
     const bool ys = sensed_ == state::ys;
     if (checked) {
         if (ys)
-            has_amp_ ? run_linear<state::ys, true, true>(force, n, out, noise) : run_linear<state::ys, false, true>(force, n, out, noise);
+            has_amp_ ? run_linear<N, state::ys, true, true>(force, n, out, noise) : run_linear<N, state::ys, false, true>(force, n, out, noise);
         else
-            has_amp_ ? run_linear<state::y, true, true>(force, n, out, noise) : run_linear<state::y, false, true>(force, n, out, noise);
+            has_amp_ ? run_linear<N, state::y, true, true>(force, n, out, noise) : run_linear<N, state::y, false, true>(force, n, out, noise);
     } else {
         if (ys)
-            has_amp_ ? run_linear<state::ys, true, false>(force, n, out, noise) : run_linear<state::ys, false, false>(force, n, out, noise);
+            has_amp_ ? run_linear<N, state::ys, true, false>(force, n, out, noise) : run_linear<N, state::ys, false, false>(force, n, out, noise);
         else
-            has_amp_ ? run_linear<state::y, true, false>(force, n, out, noise) : run_linear<state::y, false, false>(force, n, out, noise);
+            has_amp_ ? run_linear<N, state::y, true, false>(force, n, out, noise) : run_linear<N, state::y, false, false>(force, n, out, noise);
     }
 }
 
-template <int sensed, bool has_amp, bool checked>
+template <int N, int sensed, bool has_amp, bool checked>
 void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise) {
     using namespace state;
     const CascadeMap& map = *map_;
+    const ControlLaw<N>& law = controller_.law<N>();
     double xy = x_[y], xv = x_[v], xi = x_[i], xf = x_[i_f], xs = x_[ys];
     const double limit = limit_, touchdown = touchdown_;
     const bool has_clearance = std::isfinite(touchdown);  // else a diverging y (Inf) is no touchdown
     Eigen::Index saturated = 0;
     for (Eigen::Index j = 0; j < n; ++j) {
         const double e = (sensed == ys ? xs : xy) + noise[j];
-        const double wanted = pid_.step(e);
+        const double wanted = controller_.step(law, e);
         // The amplifier's limit (with none, clamping to +-Inf would change nothing, not even a bit).
         const double u = checked ? std::clamp(wanted, -limit, limit) : wanted;
         if constexpr (checked) saturated += u != wanted;
@@ -102,7 +114,7 @@ void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const d
 void Loop::run_nonlinear(const double* force, Eigen::Index n, Channels out, const double* noise) {
     for (Eigen::Index j = 0; j < n; ++j) {
         const double e = x_[sensed_] + noise[j];
-        const double wanted = pid_.step(e);
+        const double wanted = controller_.step(e);
         const double i_cmd = std::clamp(wanted, -limit_, limit_);  // the amplifier's limit
         saturated_ += i_cmd != wanted;
         out.displacement[j] = e;
@@ -148,10 +160,10 @@ void Loop::fail(Eigen::Index sample, const char* what) const {
     throw std::overflow_error(msg.str());
 }
 
-void simulate(const Rig& rig, const Pid& pid, const double* force, Eigen::Index n, Channels out,
+void simulate(const Rig& rig, const Controller& controller, const double* force, Eigen::Index n, Channels out,
               std::uint64_t seed) {
     require_finite_samples("force", force, n);
-    Loop loop(rig, pid, seed);
+    Loop loop(rig, controller, seed);
     loop.run(force, n, out);
 }
 

@@ -54,17 +54,19 @@ Rig lagged() {
     return rig;
 }
 
-Pid baseline() {
-    Pid pid;
-    pid.kp = 2000.0;
-    pid.ki = 20000.0;
-    pid.kd = 5.0;
-    pid.derivative_cutoff = 1000.0;
-    return pid;
-}
+struct Gains {
+    double kp = 2000.0, ki = 20000.0, kd = 5.0;
+    std::optional<double> derivative_cutoff = 1000.0;
+    double fs = 4000.0;
+    int delay = 1;
+    double period() const { return 1.0 / fs; }
+    double filter_pole() const { return derivative_cutoff ? std::exp(-2.0 * M_PI * *derivative_cutoff / fs) : 0.0; }
+    Controller controller() const { return pid_controller(kp, ki, kd, derivative_cutoff, fs, delay); }
+};
+Gains baseline() { return {}; }
 
 // Y/F at harmonic b of an L-sample period by composing transfer functions: ys/f = Pf / (1 - Pi G z^-d).
-cd receptance(const Rig& rig, const Pid& pid, double b, double L) {
+cd receptance(const Rig& rig, const Gains& pid, double b, double L) {
     const Propagator P = propagator(rig, pid.period());
     const cd z = std::polar(1.0, 2.0 * M_PI * b / L);
     Eigen::Matrix<cd, state::size, state::size> M = z * Eigen::Matrix<cd, state::size, state::size>::Identity();
@@ -89,11 +91,12 @@ std::vector<double> multisine(Eigen::Index L, int lines) {
 
 int main() {
     const Rig rig = lagged();
-    const Pid pid = baseline();
+    const Gains pid = baseline();
+    const Controller ctrl = pid.controller();
 
     {  // A constant force: the integral brings the platform back, the current balances the force.
         std::vector<double> force(8000, 2.0), recorded(8000), y(8000), i(8000);
-        simulate(rig, pid, force.data(), 8000, {recorded.data(), y.data(), i.data()});
+        simulate(rig, ctrl, force.data(), 8000, {recorded.data(), y.data(), i.data()});
         check(std::abs(y.back()) < 1e-12, "static displacement returns to zero");
         check(std::abs(i.back() - 2.0 / rig.kiy) < 1e-9 * 2.0 / rig.kiy, "static current = f / Kiy");
     }
@@ -107,7 +110,7 @@ int main() {
     for (int n = 1; n <= lines; ++n) plan.excited.push_back(n);
 
     {  // A settled, noise-free experiment equals the exact sampled-data response.
-        const LineEstimate e = run_experiment(rig, pid, period_force, 40, 4, plan, 0, 5);
+        const LineEstimate e = run_experiment(rig, ctrl, period_force, 40, 4, plan, 0, 5);
         double worst = 0.0;
         for (int n = 1; n <= lines; ++n) {
             const cd exact = receptance(rig, pid, n, static_cast<double>(L));
@@ -123,14 +126,17 @@ int main() {
         noisy.mass_loading = 0.05;
         noisy.force_coupling_tau = 0.2;
         noisy.current_limit = 5.0;
-        std::vector<GainPoint> points;
-        for (int g = 0; g < 37; ++g) points.push_back({1800.0 + 20.0 * g, 1e4, 4.0, 3 + g % 2, 100u + g});
-        const SweepEstimates s = run_sweep(noisy, pid, period_force, points, 3, plan, 5, 2);
+        std::vector<SweepPoint> points;
+        for (int g = 0; g < 37; ++g) {
+            Gains p = pid;
+            p.kp = 1800.0 + 20.0 * g, p.ki = 1e4, p.kd = 4.0;
+            points.push_back({noisy, p.controller(), 3 + g % 2, 100u + g});
+        }
+        const SweepEstimates s = run_sweep(period_force, points, 3, plan, 5, 2);
         bool same = true;
         for (int g : {0, 17, 36}) {
-            Pid p = pid;
-            p.kp = points[g].kp, p.ki = points[g].ki, p.kd = points[g].kd;
-            const LineEstimate e = run_experiment(noisy, p, period_force, points[g].settle_periods, 3, plan, points[g].seed, 5);
+            const LineEstimate e = run_experiment(noisy, points[g].controller, period_force, points[g].settle_periods, 3,
+                                                  plan, points[g].seed, 5);
             same = same && (s.H.row(g).transpose() - e.H).cwiseAbs().maxCoeff() == 0.0 && s.status[g] == 0;
         }
         check(same, "sweep rows equal single runs bit for bit");
@@ -167,13 +173,13 @@ int main() {
         Rig pair = rig;
         pair.force_law = ForceLaw::nonlinear;
         std::vector<double> push(400, 200.0), r(400), y(400), i(400);
-        check_throws<Touchdown>([&] { simulate(pair, pid, push.data(), 400, {r.data(), y.data(), i.data()}); },
+        check_throws<Touchdown>([&] { simulate(pair, ctrl, push.data(), 400, {r.data(), y.data(), i.data()}); },
                                 "touchdown at the air gap");
         std::vector<double> small(2000), yl(2000), yn(2000), c(2000), r1(2000);
         for (std::size_t k = 0; k < small.size(); ++k) small[k] = 1e-3 * std::sin(0.05 * static_cast<double>(k));
-        simulate(rig, pid, small.data(), 2000, {r1.data(), yl.data(), c.data()});
+        simulate(rig, ctrl, small.data(), 2000, {r1.data(), yl.data(), c.data()});
         std::vector<double> r2(2000);
-        simulate(pair, pid, small.data(), 2000, {r2.data(), yn.data(), c.data()});
+        simulate(pair, ctrl, small.data(), 2000, {r2.data(), yn.data(), c.data()});
         double diff = 0.0, peak = 0.0;
         for (std::size_t k = 0; k < yl.size(); ++k) diff = std::max(diff, std::abs(yl[k] - yn[k])), peak = std::max(peak, std::abs(yl[k]));
         check(diff < 1e-6 * peak, "non-linear law is linear at small amplitude");
@@ -183,14 +189,17 @@ int main() {
         Rig bad = rig;
         bad.mass = -1.0;
         check_throws<std::invalid_argument>([&] { bad.validate(); }, "negative mass");
-        Pid late = pid;
+        Controller late = ctrl;
         late.delay = -1;
         check_throws<std::invalid_argument>([&] { late.validate(); }, "negative delay");
-        Pid soft = pid;
+        Controller big = ctrl;
+        big.A = Eigen::MatrixXd::Zero(25, 25);
+        check_throws<std::invalid_argument>([&] { big.validate(); }, "controller order past the limit");
+        Gains soft = pid;
         soft.kp = 500.0;
         soft.ki = 0.0;
         std::vector<double> ones(40000, 1.0), r(40000), y(40000), i(40000);
-        check_throws<std::overflow_error>([&] { simulate(rig, soft, ones.data(), 40000, {r.data(), y.data(), i.data()}); },
+        check_throws<std::overflow_error>([&] { simulate(rig, soft.controller(), ones.data(), 40000, {r.data(), y.data(), i.data()}); },
                                           "unstable loop stops at a non-finite state");
     }
 

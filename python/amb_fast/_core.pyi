@@ -39,10 +39,14 @@ class Rig:
     @property
     def gap(self) -> float: ...
 
-class Pid:
-    def __init__(
-        self, *, kp: float, ki: float, kd: float, derivative_cutoff: float | None, fs: float, delay: int
-    ) -> None: ...
+class Controller:
+    def __init__(self, *, A: ArrayLike, B: ArrayLike, C: ArrayLike, D: float, fs: float, delay: int) -> None: ...
+    @property
+    def order(self) -> int: ...
+    @property
+    def fs(self) -> float: ...
+    @property
+    def delay(self) -> int: ...
 
 class LinePlan:
     def __init__(self, *, period: int, excited: ArrayLike, unexcited: ArrayLike) -> None: ...
@@ -79,10 +83,12 @@ class SweepEstimates:
     periods: int
     blocks: int
 
-def simulate(rig: Rig, pid: Pid, force: ArrayLike, seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+def simulate(
+    rig: Rig, controller: Controller, force: ArrayLike, seed: int = 0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
 def run_experiment(
     rig: Rig,
-    pid: Pid,
+    controller: Controller,
     period_force: ArrayLike,
     settle_periods: int,
     periods: int,
@@ -100,12 +106,9 @@ def identify(
     median_window: int,
 ) -> LineEstimate: ...
 def run_sweep(
-    rig: Rig,
-    pid: Pid,
     period_force: ArrayLike,
-    kp: ArrayLike,
-    ki: ArrayLike,
-    kd: ArrayLike,
+    rigs: list[Rig],
+    controllers: list[Controller],
     settle_periods: ArrayLike,
     seeds: ArrayLike,
     periods: int,

@@ -10,8 +10,8 @@ from numpy.typing import ArrayLike
 
 from . import _core
 from ._excitation import Multisine, period_samples
-from ._linear import require_stable, settle_periods_for, settling_radius
-from ._params import PID, Rig
+from ._linear import AnyController, core_controller, require_stable, settle_periods_for, settling_radius
+from ._params import Rig
 from ._validate import integer, real, require, seed_value, series
 
 
@@ -131,7 +131,7 @@ def _window(median_window: int) -> int:
 
 def run_experiment(
     rig: Rig,
-    pid: PID,
+    controller: AnyController,
     excitation: Multisine,
     *,
     periods: int = 10,
@@ -140,6 +140,9 @@ def run_experiment(
     median_window: int = 5,
 ) -> Estimate:
     """Simulate the SPHS experiment and estimate k(f), c(f), in one C++ call that keeps no time series.
+
+    ``controller``: a :class:`PID` or any :class:`~amb_fast.Controller` (transfer functions, filter
+    blocks, python-control systems), at the excitation's sample rate.
 
     The excitation period is repeated for ``settle_periods``, then ``periods`` more are recorded,
     averaged and transformed. ``settle_periods=None`` takes enough for the slowest pole ``z_max`` of
@@ -151,7 +154,8 @@ def run_experiment(
     ``Estimate.saturated_samples`` and warned about.
     """
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
-    require(excitation.fs == pid.fs, "excitation.fs", excitation.fs, f"equal to pid.fs ({pid.fs} Hz)")
+    pid = controller
+    require(excitation.fs == pid.fs, "excitation.fs", excitation.fs, f"equal to the controller's fs ({pid.fs} Hz)")
     periods = integer("periods", periods, 2)
     window = _window(median_window)
     period = excitation.period_samples
@@ -162,7 +166,14 @@ def run_experiment(
     harmonics = excitation.harmonics
     plan, unexcited = _plan(harmonics, period)
     raw = _core.run_experiment(
-        rig._to_core(), pid._to_core(), excitation.samples, settle_periods, periods, plan, seed_value(seed), window
+        rig._to_core(),
+        core_controller(pid),
+        excitation.samples,
+        settle_periods,
+        periods,
+        plan,
+        seed_value(seed),
+        window,
     )
     if raw.saturated_samples:
         total = periods * period

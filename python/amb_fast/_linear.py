@@ -9,7 +9,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Union
+from typing import TYPE_CHECKING, Any, Union
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -19,7 +19,27 @@ from ._errors import UnstableLoopError
 from ._params import PID, Rig
 from ._validate import require
 
-Controller = Union[PID, tuple, Callable[[np.ndarray], np.ndarray]]
+if TYPE_CHECKING:
+    from .controllers import Controller
+
+AnyController = Union[PID, "Controller"]
+DesignController = Union[PID, "Controller", tuple, Callable[[np.ndarray], np.ndarray]]
+
+
+def is_controller(value: Any) -> bool:
+    """A :class:`PID` or a :class:`~amb_fast.Controller` (anything with ``to_ss``, ``fs``, ``delay``)."""
+    return isinstance(value, PID) or (hasattr(value, "to_ss") and hasattr(value, "fs") and hasattr(value, "delay"))
+
+
+def state_space(controller: AnyController) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The controller's delay-free ``(A, B, C, D)`` from e[k] (m) to u[k] (A)."""
+    if isinstance(controller, PID):
+        return controller.state_space()
+    if is_controller(controller):
+        A, B, C, D = controller.to_ss()
+        return (np.asarray(A, float), np.asarray(B, float).reshape(-1, 1), np.asarray(C, float).reshape(1, -1),
+                np.asarray(D, float).reshape(1, 1))  # fmt: skip
+    raise TypeError(f"controller must be a PID or an amb_fast.Controller, got {type(controller).__name__}")
 
 
 def plant_matrices(rig: Rig) -> tuple[np.ndarray, np.ndarray, list[str]]:
@@ -67,59 +87,50 @@ def discrete_plant(rig: Rig, fs: float) -> tuple[np.ndarray, np.ndarray, list[st
     return E[:n, :n], E[:n, n:], states
 
 
-def controller_matrices(pid: PID) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The digital PID with its delay as a state space from e[k] (m) to i_cmd[k] (A).
+def core_controller(controller: AnyController) -> Any:
+    """The core's copy of a controller (``_core.Controller``), made once per distinct value."""
+    if isinstance(controller, PID):
+        return controller._to_core()
+    from ._params import _core_controller
 
-    Only the states that carry something are kept: the integral without ``ki``, the derivative
-    memory without ``kd`` and the filter state without a cutoff are left out.
+    return _core_controller(*state_space(controller), float(controller.fs), int(controller.delay))
+
+
+def controller_matrices(controller: AnyController) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The digital controller with its delay as a state space from e[k] (m) to i_cmd[k] (A).
+
+    The controller's own states (for a PID only those that carry something: see
+    :meth:`PID.state_space`), then ``delay`` states of a delay line.
     """
-    T = 1.0 / pid.fs
-    a = np.exp(-2 * np.pi * pid.derivative_cutoff * T) if pid.derivative_cutoff is not None else 0.0
-    kd_gain = pid.kd * (1 - a) / T
-    # Rows: state updates s[k+1] = Ac s + Bc e; u[k] = Cc s + Dc e.
-    names = [n for n, on in (("I", pid.ki != 0), ("D", pid.kd != 0 and a != 0), ("E", pid.kd != 0)) if on]
-    m = len(names)
-    Ac, Bc, Cc = np.zeros((m, m)), np.zeros(m), np.zeros(m)
-    Dc = pid.kp + pid.ki * T + kd_gain
-    idx = {name: j for j, name in enumerate(names)}
-    if "I" in idx:
-        Ac[idx["I"], idx["I"]] = 1.0
-        Bc[idx["I"]] = pid.ki * T
-        Cc[idx["I"]] = 1.0
-    if "D" in idx:
-        Ac[idx["D"], idx["D"]] = a
-        Ac[idx["D"], idx["E"]] = -kd_gain
-        Bc[idx["D"]] = kd_gain
-        Cc[idx["D"]] = a
-    if "E" in idx:
-        Bc[idx["E"]] = 1.0
-        Cc[idx["E"]] = -kd_gain
+    Ac, Bc, Cc, Dc = state_space(controller)
     # Delay line q[k+1] = (u[k], q1[k], ...), i_cmd[k] = q_d[k].
-    d = pid.delay
+    d = controller.delay
     if d == 0:
-        return Ac, Bc[:, None], Cc[None, :], np.array([[Dc]])
+        return Ac, Bc, Cc, Dc
+    m = Ac.shape[0]
     size = m + d
     A2 = np.zeros((size, size))
     A2[:m, :m] = Ac
-    A2[m, :m] = Cc
+    A2[m, :m] = Cc[0]
     for j in range(1, d):
         A2[m + j, m + j - 1] = 1.0
     B2 = np.zeros((size, 1))
-    B2[:m, 0] = Bc
-    B2[m, 0] = Dc
+    B2[:m] = Bc
+    B2[m, 0] = Dc[0, 0]
     C2 = np.zeros((1, size))
     C2[0, -1] = 1.0
     return A2, B2, C2, np.zeros((1, 1))
 
 
-def closed_loop(rig: Rig, pid: PID) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def closed_loop(rig: Rig, controller: AnyController) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The linear loop as one discrete state space ``(A, B, C, D)`` with sample period ``1/fs``.
 
     Input: force f[k] (N). Outputs: sensor displacement ys(kT) (m) and coil current (A). State: the
-    plant's, then the controller's (see :func:`controller_matrices`).
+    plant's, then the controller's (see :func:`controller_matrices`). ``controller``: a :class:`PID`
+    or any :class:`~amb_fast.Controller`.
     """
-    Phi, Gamma, states = discrete_plant(rig, pid.fs)
-    Ac, Bc, Cc, Dc = controller_matrices(pid)
+    Phi, Gamma, states = discrete_plant(rig, controller.fs)
+    Ac, Bc, Cc, Dc = controller_matrices(controller)
     n, m = len(states), Ac.shape[0]
     sensor = np.zeros((1, n))
     sensor[0, states.index("ys") if "ys" in states else 0] = 1.0
@@ -132,28 +143,39 @@ def closed_loop(rig: Rig, pid: PID) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     return A, B, C, np.zeros((2, 1))
 
 
-def closed_loop_poles(rig: Rig, pid: PID) -> np.ndarray:
+def closed_loop_poles(rig: Rig, controller: AnyController) -> np.ndarray:
     """Poles of the linearised sampled-data loop in the z-plane (stable: all ``|z| < 1``).
 
-    The equivalent continuous-time poles are ``log(z) * pid.fs`` (rad/s).
+    The equivalent continuous-time poles are ``log(z) * fs`` (rad/s).
     """
-    return np.linalg.eigvals(closed_loop(rig, pid)[0])
+    return np.linalg.eigvals(closed_loop(rig, controller)[0])
+
+
+def loop_poles(rig: Rig, controller: AnyController) -> np.ndarray:
+    """The closed-loop poles as every run and sweep computes them (so they choose the same settling):
+    for a PID the affine stack of :func:`spectral_radius`, else the eigenvalues of :func:`closed_loop`."""
+    if isinstance(controller, PID):
+        ((_, stack),) = _closed_loop_stacks(rig, controller, _gain_arrays(controller, None, None, None))
+        return np.linalg.eigvals(stack)[0]
+    return np.linalg.eigvals(closed_loop(rig, controller)[0])
 
 
 @functools.lru_cache(maxsize=256)
-def require_stable(rig: Rig, pid: PID) -> np.ndarray:
-    """The closed-loop poles (as :func:`spectral_radius` computes them, read-only), or
-    :class:`UnstableLoopError` naming the unstable ones and the gains."""
-    ((_, stack),) = _closed_loop_stacks(rig, pid, _gain_arrays(pid, None, None, None))
-    poles = np.linalg.eigvals(stack)[0]
+def require_stable(rig: Rig, controller: AnyController) -> np.ndarray:
+    """The closed-loop poles (as :func:`loop_poles` computes them, read-only), or
+    :class:`UnstableLoopError` naming the unstable ones and the controller."""
+    poles = loop_poles(rig, controller)
     poles.flags.writeable = False
     bad = poles[np.abs(poles) >= 1.0]
     if bad.size:
         shown = ", ".join(f"{p:.6g} (|z|={abs(p):.6g})" for p in bad[:4])
+        if isinstance(controller, PID):
+            what = (f"kp={controller.kp} A/m, ki={controller.ki} A/(m s), kd={controller.kd} A s/m, "
+                    f"delay={controller.delay}")  # fmt: skip
+        else:
+            what = repr(controller)
         raise UnstableLoopError(
-            f"the closed loop is unstable with kp={pid.kp} A/m, ki={pid.ki} A/(m s), kd={pid.kd} A s/m, "
-            f"delay={pid.delay}: pole(s) on or outside the unit circle: {shown}",
-            bad,
+            f"the closed loop is unstable with {what}: pole(s) on or outside the unit circle: {shown}", bad
         )
     return poles
 
@@ -214,7 +236,7 @@ def spectral_radius(
     return radius
 
 
-def settling_radius(rig: Rig, pid: PID, radius: ArrayLike) -> np.ndarray:
+def settling_radius(rig: Rig, pid: AnyController, radius: ArrayLike) -> np.ndarray:
     """The slowest decay per sample of a run: the loop's spectral ``radius``, or the force transducer's
     AC-coupling pole ``exp(-1/(fs tau))`` when that is slower (it settles on the applied force)."""
     if rig.force_coupling_tau is None:
@@ -249,7 +271,7 @@ def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, z: np.ndarray) -> np.
 
 def predict(
     rig: Rig,
-    pid: PID,
+    pid: AnyController,
     freq: ArrayLike,
     *,
     kp: ArrayLike | None = None,
@@ -258,11 +280,12 @@ def predict(
 ) -> np.ndarray:
     """Exact receptance Y/F (m/N) of the linearised sampled-data loop at ``freq`` (Hz).
 
-    Y is the sensor output and F the recorded force (through the transducer's AC coupling, if any),
-    both sampled at ``pid.fs``, as an experiment records them; a settled, noise-free, period-averaged
-    experiment reproduces it at every excited line to rounding.
+    ``pid``: a :class:`PID` or any :class:`~amb_fast.Controller`. Y is the sensor output and F the
+    recorded force (through the transducer's AC coupling, if any), both sampled at ``fs``, as an
+    experiment records them; a settled, noise-free, period-averaged experiment reproduces it at every
+    excited line to rounding.
 
-    Given ``kp``, ``ki`` or ``kd`` (arrays, broadcast together; the others from ``pid``), returns an
+    With a PID, given ``kp``, ``ki`` or ``kd`` (arrays, broadcast together; the others from ``pid``), returns an
     array of shape (gain sets, len(freq)) for all of them at once: the plant's two responses are
     computed once and the controller, linear in its gains, is combined with them per gain set.
     """
@@ -271,6 +294,8 @@ def predict(
     if kp is None and ki is None and kd is None:
         A, B, C, _ = closed_loop(rig, pid)
         return (_response(A, B, C[:1], z)[0, 0] / transducer_response(rig, pid.fs, z)).reshape(f.shape)
+    if not isinstance(pid, PID):
+        raise ValueError(f"kp, ki, kd arrays need a PID controller, got {type(pid).__name__}")
     gains = _gain_arrays(pid, kp, ki, kd)
     Pf, Pi = _plant_responses(rig, pid.fs, f.ravel())
     K = _controller_terms(pid, f.ravel())  # (3, freq): d G / d(kp, ki, kd), delay included
@@ -334,7 +359,7 @@ def iso_zone(peak: float) -> str:
     return "A" if peak < 3 else "B" if peak < 4 else "C" if peak < 5 else "D"
 
 
-def sensitivity(rig: Rig, pid: PID, freq: ArrayLike) -> np.ndarray:
+def sensitivity(rig: Rig, pid: AnyController, freq: ArrayLike) -> np.ndarray:
     """Sensitivity S = 1/(1 + L) with the loop broken at the controller output, at ``freq`` (Hz)."""
     f = _frequencies(freq, pid.fs)
     Phi, Gamma, states = discrete_plant(rig, pid.fs)
@@ -347,7 +372,7 @@ def sensitivity(rig: Rig, pid: PID, freq: ArrayLike) -> np.ndarray:
     return (1.0 / (1.0 - plant * control)).reshape(f.shape)
 
 
-def stability_margin(rig: Rig, pid: PID, points: int = 20_000) -> StabilityMargin:
+def stability_margin(rig: Rig, pid: AnyController, points: int = 20_000) -> StabilityMargin:
     """Peak of |S| over ``points`` log-spaced frequencies from 0.01 Hz to just below Nyquist."""
     require(isinstance(points, int) and points >= 2, "points", points, "a whole number >= 2")
     stable = bool(np.all(np.abs(closed_loop_poles(rig, pid)) < 1.0))
@@ -359,9 +384,18 @@ def stability_margin(rig: Rig, pid: PID, points: int = 20_000) -> StabilityMargi
     return StabilityMargin(float(S[j]), float(20 * np.log10(S[j])), float(f[j]), iso_zone(float(S[j])), True)
 
 
-def controller_response(controller: Controller, freq: np.ndarray, *, discrete: bool = False) -> np.ndarray:
-    """G(jw) (A/m) of a PID, a (num, den) polynomial pair in s, or a callable of s = jw."""
+def controller_response(controller: DesignController, freq: np.ndarray, *, discrete: bool = False) -> np.ndarray:
+    """G(jw) (A/m) of a PID, a Controller, a (num, den) polynomial pair in s, or a callable of s = jw.
+
+    A :class:`~amb_fast.Controller` gives its continuous design's G(jw) when it has one, else (and
+    with ``discrete=True``) its digital G(e^{jwT}) with the computation delay.
+    """
     s = 2j * np.pi * freq
+    if not isinstance(controller, PID) and is_controller(controller):
+        general: Any = controller
+        if discrete or getattr(general, "continuous", None) is None:
+            return np.asarray(general.response(freq), dtype=complex)
+        return np.asarray(general.continuous_response(freq), dtype=complex)
     if isinstance(controller, PID):
         pid = controller
         if discrete:
@@ -372,7 +406,7 @@ def controller_response(controller: Controller, freq: np.ndarray, *, discrete: b
             return G * zi**pid.delay
         derivative = s if pid.derivative_cutoff is None else s / (1 + s / (2 * np.pi * pid.derivative_cutoff))
         return pid.kp + pid.ki / s + pid.kd * derivative
-    require(not discrete, "discrete", discrete, "False unless the controller is a PID")
+    require(not discrete, "discrete", discrete, "False unless the controller is a PID or a Controller")
     if isinstance(controller, tuple):
         require(len(controller) == 2, "controller", controller, "a (num, den) pair of polynomial coefficients in s")
         num, den = (np.atleast_1d(np.asarray(p, dtype=float)) for p in controller)
@@ -383,7 +417,7 @@ def controller_response(controller: Controller, freq: np.ndarray, *, discrete: b
 
 def effective_coefficients(
     rig: Rig,
-    controller: Controller,
+    controller: DesignController,
     freq: ArrayLike,
     *,
     discrete: bool = False,
@@ -394,8 +428,10 @@ def effective_coefficients(
     """Effective stiffness (N/m) and damping (N s/m) of paper eq. 5 at ``freq`` (Hz).
 
     ``k_eff = Kyy + Kiy Re G(jw)``, ``c_eff = Kiy Im G(jw) / w``, with ``controller`` a :class:`PID`
-    (its theoretical G(s); ``discrete=True`` uses the digital G(z), delay included), a ``(num, den)``
-    pair of polynomial coefficients in s (highest power first), or a callable of s = jw.
+    (its theoretical G(s); ``discrete=True`` uses the digital G(z), delay included), a
+    :class:`~amb_fast.Controller` (its continuous design when it has one, else or with
+    ``discrete=True`` its digital G(z) with the delay), a ``(num, den)`` pair of polynomial
+    coefficients in s (highest power first), or a callable of s = jw.
 
     With a PID, ``kp``, ``ki``, ``kd`` arrays (broadcast together) give arrays of shape
     (gain sets, len(freq)): G is linear in the gains, so each gain set costs one product.

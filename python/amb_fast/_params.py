@@ -4,10 +4,15 @@ from __future__ import annotations
 
 import functools
 from dataclasses import asdict, dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
+
+import numpy as np
 
 from . import _core
 from ._validate import integer, optional_positive, real, require
+
+if TYPE_CHECKING:
+    from .controllers import Controller
 
 ForceLaw = Literal["linear", "nonlinear"]
 
@@ -172,8 +177,45 @@ class PID:
         """
         return cls(kp=2400.0, ki=20000.0, kd=3.0, derivative_cutoff=1000.0, fs=4000.0, delay=0)
 
-    def _to_core(self) -> _core.Pid:
-        return _core_pid(self)
+    def to_controller(self) -> Controller:
+        """This PID as a general :class:`~amb_fast.Controller`: the same difference equations (a run
+        with either is bit for bit the same), its continuous design ``kp + ki/s + kd s/(1 + s/wd)``
+        and its parameters ``kp``, ``ki``, ``kd``, ``derivative_cutoff`` for sweeps and design."""
+        from .controllers import pid_controller
+
+        return pid_controller(self)
+
+    def state_space(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The digital PID without its delay as ``(A, B, C, D)`` from e[k] (m) to u[k] (A).
+
+        States: the integral I, the filtered derivative D and the previous error E, each only where
+        it carries something (no ``ki``: no I; no ``kd``: no D, E; no cutoff: no D). The law is
+        ``I += ki T e``, ``D = a D + kd (1 - a)/T (e - E)``, ``u = kp e + I + D`` with
+        ``a = exp(-2 pi fd T)`` (0 without a filter).
+        """
+        T = 1.0 / self.fs
+        a = np.exp(-2 * np.pi * self.derivative_cutoff * T) if self.derivative_cutoff is not None else 0.0
+        kd_gain = self.kd * (1 - a) / T
+        names = [n for n, on in (("I", self.ki != 0), ("D", self.kd != 0 and a != 0), ("E", self.kd != 0)) if on]
+        m = len(names)
+        A, B, C = np.zeros((m, m)), np.zeros((m, 1)), np.zeros((1, m))
+        idx = {name: j for j, name in enumerate(names)}
+        if "I" in idx:
+            A[idx["I"], idx["I"]] = 1.0
+            B[idx["I"], 0] = self.ki * T
+            C[0, idx["I"]] = 1.0
+        if "D" in idx:
+            A[idx["D"], idx["D"]] = a
+            A[idx["D"], idx["E"]] = -kd_gain
+            B[idx["D"], 0] = kd_gain
+            C[0, idx["D"]] = a
+        if "E" in idx:
+            B[idx["E"], 0] = 1.0
+            C[0, idx["E"]] = -kd_gain
+        return A, B, C, np.array([[self.kp + self.ki * T + kd_gain]])
+
+    def _to_core(self) -> _core.Controller:
+        return _core_controller(*self.state_space(), self.fs, self.delay)
 
 
 # The core's copies of the parameters, made once per distinct value (the dataclasses are frozen).
@@ -184,6 +226,20 @@ def _core_rig(rig: Rig) -> _core.Rig:
     return _core.Rig(**fields)
 
 
+def _core_controller(
+    A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray, fs: float, delay: int
+) -> _core.Controller:
+    """The core's copy of a controller's state space (delay-free matrices plus whole-sample delay)."""
+    return _cached_core_controller(A.tobytes(), B.tobytes(), C.tobytes(), float(D[0, 0]), A.shape[0], fs, delay)
+
+
 @functools.lru_cache(maxsize=256)
-def _core_pid(pid: PID) -> _core.Pid:
-    return _core.Pid(**asdict(pid))
+def _cached_core_controller(A: bytes, B: bytes, C: bytes, D: float, n: int, fs: float, delay: int) -> _core.Controller:
+    return _core.Controller(
+        A=np.frombuffer(A).reshape(n, n),
+        B=np.frombuffer(B),
+        C=np.frombuffer(C),
+        D=D,
+        fs=fs,
+        delay=delay,
+    )

@@ -9,7 +9,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
-from ._params import PID, Rig
+from ._linear import AnyController, core_controller
+from ._params import Rig
 from ._validate import seed_value, series
 
 
@@ -46,8 +47,10 @@ class Trace:
         save_recording(path, force=self.force, displacement=self.displacement, fs=self.fs)
 
 
-def simulate(rig: Rig, pid: PID, force: ArrayLike, *, seed: int | None = None) -> Trace:
-    """Run the closed loop on a force sequence (N) sampled at ``pid.fs``, from rest.
+def simulate(rig: Rig, controller: AnyController, force: ArrayLike, *, seed: int | None = None) -> Trace:
+    """Run the closed loop on a force sequence (N) sampled at the controller's ``fs``, from rest.
+
+    ``controller``: a :class:`PID` or any :class:`~amb_fast.Controller`.
 
     The force is zero-order held between samples (a DAC). The linear force law is discretised exactly;
     the non-linear one is integrated with RK4, ``rig.substeps`` steps per sample. The GIL is released
@@ -61,5 +64,6 @@ def simulate(rig: Rig, pid: PID, force: ArrayLike, *, seed: int | None = None) -
         If the state stops being finite (an unstable loop) or the platform leaves the air gap.
     """
     force = series("force", force)
-    recorded, displacement, current = _core.simulate(rig._to_core(), pid._to_core(), force, seed_value(seed))
-    return Trace(force=recorded, displacement=displacement, current=current, fs=pid.fs)
+    recorded, displacement, current = _core.simulate(rig._to_core(), core_controller(controller), force,
+                                                     seed_value(seed))  # fmt: skip
+    return Trace(force=recorded, displacement=displacement, current=current, fs=controller.fs)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import json
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable
 from concurrent.futures import Executor, ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -17,13 +17,27 @@ from numpy.typing import ArrayLike
 from . import _core
 from ._excitation import Multisine
 from ._experiment import _plan, _window
-from ._linear import settle_periods_for, settling_radius, spectral_radius
+from ._linear import AnyController, core_controller, loop_poles, settle_periods_for, settling_radius, spectral_radius
 from ._params import PID, Rig
 from ._validate import integer, require, seed_value
 
-SWEPT = ("kp", "ki", "kd")
+SWEPT = ("kp", "ki", "kd")  # the PID gains: swept together in closed form
 STATUS = ("ok", "unstable", "touchdown", "saturated")  # index = the core's PointStatus
-UNITS = {"kp": "A/m", "ki": "A/(m s)", "kd": "A s/m"}
+UNITS = {
+    "kp": "A/m", "ki": "A/(m s)", "kd": "A s/m", "derivative_cutoff": "Hz", "mass": "kg", "kyy": "N/m",
+    "kiy": "N/A", "bias_current": "A", "amp_bandwidth": "Hz", "eddy_bandwidth": "Hz", "sensor_bandwidth": "Hz",
+    "sensor_noise": "m rms", "force_noise": "N rms", "mass_loading": "kg", "force_coupling_tau": "s",
+    "clearance": "m", "current_limit": "A",
+}  # fmt: skip
+RIG_FIELDS = tuple(f.name for f in fields(Rig) if f.name not in ("force_law", "substeps"))
+Factory = Callable[..., tuple[Rig, AnyController]]
+
+
+def unit_of(name: str) -> str:
+    """Unit of a sweep axis: a rig or PID field's, Hz for a block's frequency, else ``""``."""
+    if name in UNITS:
+        return UNITS[name]
+    return "Hz" if name.endswith("_freq") or name.endswith("_width") else ""
 
 
 @dataclass(frozen=True)
@@ -33,10 +47,10 @@ class SweepResult:
     Attributes
     ----------
     points : dict of str to ndarray
-        Each swept gain's value at every point (A/m, A/(m s), A s/m).
+        Each swept parameter's value at every point (units: :func:`unit_of`, e.g. A/m for kp).
     axes : dict of str to ndarray
-        The values given for each swept gain; for ``grid="product"`` the grid's shape is their lengths
-        (C order: the last name varies fastest).
+        The values given for each swept parameter; for ``grid="product"`` the grid's shape is their
+        lengths (C order: the last name varies fastest).
     grid : {"product", "zip"}
     freq : ndarray
         Excited lines, Hz.
@@ -76,13 +90,13 @@ class SweepResult:
 
     @property
     def shape(self) -> tuple[int, ...]:
-        """Grid shape: one axis per swept gain for product grids, else (points,)."""
+        """Grid shape: one axis per swept parameter for product grids, else (points,)."""
         if self.grid == "product":
             return tuple(len(v) for v in self.axes.values())
         return (len(self.status),)
 
     def to_xarray(self):  # noqa: ANN201 - xarray is optional
-        """An ``xarray.Dataset`` with one dimension per swept gain (product grids) or ``point``, and ``freq``."""
+        """An ``xarray.Dataset`` with one dimension per swept parameter (product grids) or ``point``, and ``freq``."""
         try:
             import xarray as xr
         except ImportError as error:
@@ -90,11 +104,11 @@ class SweepResult:
         if self.grid == "product":
             dims = list(self.axes)
             coords: dict[str, Any] = {
-                name: (name, values, {"units": UNITS[name]}) for name, values in self.axes.items()
+                name: (name, values, {"units": unit_of(name)}) for name, values in self.axes.items()
             }
         else:
             dims = ["point"]
-            coords = {name: ("point", values, {"units": UNITS[name]}) for name, values in self.points.items()}
+            coords = {name: ("point", values, {"units": unit_of(name)}) for name, values in self.points.items()}
         coords["freq"] = ("freq", self.freq, {"units": "Hz"})
         coords["unexcited_freq"] = ("unexcited_freq", self.unexcited_freq, {"units": "Hz"})
         shape = self.shape
@@ -115,7 +129,8 @@ class SweepResult:
             "settle_periods": (dims, self.settle_periods.reshape(shape)),
             "seeds": (dims, self.seeds.reshape(shape)),
         }
-        attrs = {"grid": self.grid, "periods": self.periods, "blocks": self.blocks, "meta": json.dumps(self.meta)}
+        attrs = {"grid": self.grid, "periods": self.periods, "blocks": self.blocks, "meta": json.dumps(self.meta),
+                 "axes": json.dumps(list(self.axes))}  # fmt: skip
         return xr.Dataset(data, coords=coords, attrs=attrs)
 
     def save(self, path: str | Path) -> None:
@@ -156,7 +171,7 @@ def load_sweep(path: str | Path) -> SweepResult:
     with xr.open_dataset(path, engine="h5netcdf") as ds:
         ds = ds.load()
     grid = ds.attrs["grid"]
-    names = [n for n in SWEPT if n in ds.coords]
+    names = json.loads(ds.attrs["axes"]) if "axes" in ds.attrs else [n for n in SWEPT if n in ds.coords]
     n_dims = len(names) if grid == "product" else 1
 
     n_points = int(ds.status.size)
@@ -204,17 +219,15 @@ def point_seeds(seed: int, count: int) -> np.ndarray:
     return z ^ (z >> np.uint64(31))
 
 
-def _grid(pid: PID, values: dict[str, ArrayLike | None], grid: str) -> tuple[dict, dict]:
+def _grid(values: dict[str, ArrayLike], grid: str) -> tuple[dict, dict]:
     require(grid in ("product", "zip"), "grid", grid, "'product' or 'zip'")
     axes = {}
     for name, given in values.items():
-        if given is None:
-            continue
         array = np.atleast_1d(np.asarray(given, dtype=float))
         require(array.ndim == 1 and array.size > 0, name, given, "a non-empty 1-D sequence")
-        require(bool(np.all(np.isfinite(array))), name, given, f"finite ({UNITS[name]})")
+        require(bool(np.all(np.isfinite(array))), name, given, f"finite ({unit_of(name) or 'no unit'})")
         axes[name] = array
-    require(bool(axes), "kp, ki, kd", None, "at least one of them given")
+    require(bool(axes), "axes", None, "at least one swept parameter (e.g. kp=[...], amp_bandwidth=[...])")
     if grid == "product":
         mesh = np.meshgrid(*axes.values(), indexing="ij")
         points = {name: m.ravel() for name, m in zip(axes, mesh)}
@@ -225,18 +238,69 @@ def _grid(pid: PID, values: dict[str, ArrayLike | None], grid: str) -> tuple[dic
     return axes, points
 
 
+def _controller_params(controller: AnyController) -> dict[str, float]:
+    if isinstance(controller, PID):
+        return {"kp": controller.kp, "ki": controller.ki, "kd": controller.kd,
+                "derivative_cutoff": controller.derivative_cutoff}  # type: ignore[dict-item]  # fmt: skip
+    return dict(getattr(controller, "params", {}))
+
+
+def _check_names(rig: Rig, controller: AnyController, names: list[str]) -> None:
+    known = [*RIG_FIELDS, *_controller_params(controller)]
+    for name in names:
+        require(name in known, "sweep axis", name,
+                f"a numeric Rig field or a controller parameter: one of {', '.join(known)}")  # fmt: skip
+
+
+def point_model(
+    rig: Rig, controller: AnyController, values: dict[str, float], factory: Factory | None = None
+) -> tuple[Rig, AnyController]:
+    """The rig and controller of one sweep point: ``factory(**values)``, or ``rig`` and ``controller``
+    with the named fields (rig fields first, then controller parameters) replaced."""
+    if factory is not None:
+        made = factory(**values)
+        require(isinstance(made, tuple) and len(made) == 2 and isinstance(made[0], Rig), "factory result",
+                made, "a (Rig, controller) pair")  # fmt: skip
+        return made
+    on_rig = {k: v for k, v in values.items() if k in RIG_FIELDS}
+    on_controller = {k: v for k, v in values.items() if k not in RIG_FIELDS}
+    if on_rig:
+        rig = replace(rig, **on_rig)  # type: ignore[arg-type]
+    if on_controller:
+        if isinstance(controller, PID):
+            controller = replace(controller, **on_controller)  # type: ignore[arg-type]
+        else:
+            controller = controller.with_params(**on_controller)
+    return rig, controller
+
+
 def _run_chunk(
-    rig: Rig, pid: PID, excitation: Multisine, gains: np.ndarray, seeds: np.ndarray, periods: int,
-    settle_periods: int | None, window: int, workers: int,
+    rig: Rig | None, controller: AnyController | None, factory: Factory | None, excitation: Multisine,
+    values: dict[str, np.ndarray], seeds: np.ndarray, periods: int, settle_periods: int | None, window: int,
+    workers: int,
 ) -> dict[str, np.ndarray]:  # fmt: skip
-    """One unit of work, for a thread or any executor (picklable arguments, numpy results): the
-    stability check (an unstable point is flagged, never simulated), the settling time, then one
-    batched core call for the stable points."""
-    n = len(gains)
-    radius = spectral_radius(rig, pid, kp=gains[:, 0], ki=gains[:, 1], kd=gains[:, 2])
+    """One unit of work, for a thread or any executor (picklable arguments, numpy results): each
+    point's rig and controller, the stability check (an unstable point is flagged, never simulated),
+    the settling time, then one batched core call for the stable points."""
+    n = len(seeds)
+    names = list(values)
+    if factory is None and isinstance(controller, PID) and set(names) <= set(SWEPT):
+        # PID gains only: the closed loop is affine in them, so all radii come in one call.
+        assert rig is not None
+        radius = spectral_radius(rig, controller, **{name: values[name] for name in names})
+        models = [(rig, replace(controller, **{k: float(values[k][j]) for k in names})) for j in range(n)]  # type: ignore[arg-type]
+    else:
+        models = [point_model(rig, controller, {k: float(values[k][j]) for k in names}, factory)  # type: ignore[arg-type]
+                  for j in range(n)]  # fmt: skip
+        radius = np.array([np.max(np.abs(loop_poles(r, c)), initial=0.0) for r, c in models])
+    fs = excitation.fs
+    for _, c in models:
+        require(c.fs == fs, "controller fs", c.fs, f"equal to the excitation's fs ({fs} Hz)")
     stable = radius < 1.0
     if settle_periods is None:  # the rule of run_experiment, so every point reruns bit for bit
-        slowest = settling_radius(rig, pid, np.where(stable, radius, 0.0))
+        slowest = np.array(
+            [settling_radius(r, c, rad if ok else 0.0) for (r, c), rad, ok in zip(models, radius, stable)]
+        )
         settle = np.where(stable, settle_periods_for(slowest, excitation.period_samples), 0)
     else:
         settle = np.full(n, settle_periods)
@@ -249,9 +313,11 @@ def _run_chunk(
     out["settle_periods"] = settle.astype(np.int64)
     rows = np.flatnonzero(stable)
     if rows.size:
-        kp, ki, kd = gains[rows].T.copy()
-        core = _core.run_sweep(rig._to_core(), pid._to_core(), excitation.samples, kp, ki, kd,
-                               out["settle_periods"][rows], seeds[rows], periods, plan, window, workers)  # fmt: skip
+        masses = {models[j][0].mass for j in rows}
+        require(len(masses) == 1, "mass", sorted(masses), "the same at every point of a sweep (kg)")
+        core = _core.run_sweep(excitation.samples, [models[j][0]._to_core() for j in rows],
+                               [core_controller(models[j][1]) for j in rows], out["settle_periods"][rows],
+                               seeds[rows], periods, plan, window, workers)  # fmt: skip
         for name in _CORE_FIELDS:
             out[name][rows] = np.asarray(getattr(core, name))
     return out
@@ -273,13 +339,10 @@ def _progress_bar(progress: bool | None, total: int):  # noqa: ANN202
 
 
 def sweep(
-    rig: Rig,
-    pid: PID,
-    excitation: Multisine,
+    rig: Rig | Factory,
+    controller: AnyController | Multisine,
+    excitation: Multisine | None = None,
     *,
-    kp: Sequence[float] | np.ndarray | None = None,
-    ki: Sequence[float] | np.ndarray | None = None,
-    kd: Sequence[float] | np.ndarray | None = None,
     grid: Literal["product", "zip"] = "product",
     periods: int = 10,
     settle_periods: int | None = None,
@@ -289,13 +352,22 @@ def sweep(
     seed: int | None = None,
     median_window: int = 5,
     chunk_size: int | None = None,
+    **axes: ArrayLike,
 ) -> SweepResult:
-    """Run the experiment of :func:`run_experiment` for many gain sets.
+    """Run the experiment of :func:`run_experiment` for many rigs and controllers.
 
-    ``kp``, ``ki``, ``kd`` are sequences of values (A/m, A/(m s), A s/m); omitted ones stay at
-    ``pid``'s. ``grid="product"`` crosses them, ``"zip"`` pairs them. Points whose linearised loop
-    is unstable are flagged and not simulated; the rest run in a batched C++ core, ``workers``
-    threads per call (default: all cores), with the GIL released.
+    ``sweep(rig, controller, excitation, kp=[...], amp_bandwidth=[...])``: each keyword names what it
+    sweeps: a numeric field of the :class:`Rig` (``kyy``, ``amp_bandwidth``, ``mass_loading``, ...),
+    a field of a :class:`PID` (``kp``, ``ki``, ``kd``, ``derivative_cutoff``) or a parameter of a
+    :class:`~amb_fast.Controller` (its ``params``: ``kp``, ``notch_freq``, ``low_pass_freq``, ...;
+    the names are ``<block>_<parameter>``, see :class:`~amb_fast.Controller`). Everything not swept
+    stays as given. ``sweep(factory, excitation, x=[...], y=[...])`` takes any callable
+    ``factory(**point) -> (rig, controller)`` instead, for anything else.
+
+    ``grid="product"`` crosses the axes, ``"zip"`` pairs them. Points whose linearised loop is
+    unstable are flagged and not simulated; the rest run in a batched C++ core (points with the same
+    rig and controller shape advance in lock step), ``workers`` threads per call (default: all
+    cores), with the GIL released. Every point equals :func:`run_experiment` of that point bit for bit.
 
     The grid is cut into chunks of ``chunk_size`` points (default: about eight per worker), each run
     by the batched core: on ``workers`` threads here, or on ``executor``, any
@@ -304,13 +376,24 @@ def sweep(
     come back in grid order. ``progress``: a tqdm bar (default: when stderr is a terminal). ``seed`` fixes the
     measurement noise; each point gets its own seed (see ``SweepResult.seeds``).
     """
+    factory: Factory | None = None
+    if callable(rig) and not isinstance(rig, Rig):
+        require(excitation is None, "excitation", excitation, "given once: sweep(factory, excitation, **axes)")
+        factory, excitation, base_rig, base_controller = rig, controller, None, None  # type: ignore[assignment]
+    else:
+        require(isinstance(rig, Rig), "rig", type(rig).__name__, "a Rig (or a factory callable)")
+        base_rig, base_controller = rig, controller  # type: ignore[assignment]
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
-    require(excitation.fs == pid.fs, "excitation.fs", excitation.fs, f"equal to pid.fs ({pid.fs} Hz)")
-    axes, points = _grid(pid, {"kp": kp, "ki": ki, "kd": kd}, grid)
+    assert isinstance(excitation, Multisine)
+    if base_controller is not None:
+        require(excitation.fs == base_controller.fs, "excitation.fs", excitation.fs,
+                f"equal to the controller's fs ({base_controller.fs} Hz)")  # fmt: skip
+    axes_values, points = _grid(axes, grid)
+    if factory is None:
+        _check_names(base_rig, base_controller, list(points))  # type: ignore[arg-type]
     periods = integer("periods", periods, 2)
     window = _window(median_window)
     n = len(next(iter(points.values())))
-    gains = np.column_stack([points.get(name, np.full(n, getattr(pid, name))) for name in SWEPT])
 
     if settle_periods is not None:
         settle_periods = integer("settle_periods", settle_periods, 0)
@@ -332,10 +415,11 @@ def sweep(
         futures = [
             run_on.submit(
                 _run_chunk,
-                rig,
-                pid,
+                base_rig,
+                base_controller,
+                factory,
                 excitation,
-                gains[rows],
+                {name: values[rows] for name, values in points.items()},
                 seeds[rows],
                 periods,
                 settle_periods,
@@ -358,10 +442,14 @@ def sweep(
             bar.close()
     status = np.array(STATUS)[results.pop("status")]
     settle = results.pop("settle_periods")
+    if isinstance(base_controller, PID):
+        described: Any = base_controller.__dict__
+    else:
+        described = repr(factory if factory is not None else base_controller)
 
     return SweepResult(
         points=points,
-        axes=axes,
+        axes=axes_values,
         grid=grid,
         freq=excitation.freq,
         status=status,
@@ -370,6 +458,11 @@ def sweep(
         unexcited_freq=unexcited * excitation.f0,
         periods=periods,
         blocks=periods // max(1, periods // 32),
-        meta={"rig": rig.__dict__, "pid": pid.__dict__, "f0": excitation.f0, "fs": excitation.fs},
+        meta={
+            "rig": None if base_rig is None else base_rig.__dict__,
+            "controller": described,
+            "f0": excitation.f0,
+            "fs": excitation.fs,
+        },  # fmt: skip
         **results,
     )

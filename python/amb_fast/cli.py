@@ -169,7 +169,8 @@ def cmd_sweep(args: argparse.Namespace) -> None:
     if args.kp is None and args.ki is None and args.kd is None:
         raise UsageError("give at least one of --kp, --ki, --kd (e.g. --kp 2000:3000:11)")
     excitation = _excitation(args, pid)
-    result = sweep(rig, pid, excitation, kp=args.kp, ki=args.ki, kd=args.kd, grid=args.grid, periods=args.periods,
+    gains = {name: getattr(args, name) for name in ("kp", "ki", "kd") if getattr(args, name) is not None}
+    result = sweep(rig, pid, excitation, **gains, grid=args.grid, periods=args.periods,
                    settle_periods=args.settle_periods, workers=args.workers, seed=args.seed,
                    progress=None if not args.no_progress else False)  # fmt: skip
     counts = {s: int(np.sum(result.status == s)) for s in np.unique(result.status)}

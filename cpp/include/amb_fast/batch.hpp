@@ -1,6 +1,6 @@
-// Many gain sets of one experiment at once: the loops advance in lock step, a structure of arrays
-// with the gain sets innermost, split across threads. Each gain set gets exactly the numbers that
-// run_experiment gives it alone.
+// Many points (rig, controller) of one experiment at once: points whose rig is the same and whose
+// controllers share a shape advance in lock step, a structure of arrays with the points innermost,
+// split across threads. Each point gets exactly the numbers that run_experiment gives it alone.
 #pragma once
 
 #include <Eigen/Dense>
@@ -13,8 +13,9 @@ namespace amb_fast {
 
 enum class PointStatus : int { ok = 0, unstable = 1, touchdown = 2, saturated = 3 };
 
-struct GainPoint {
-    double kp, ki, kd;             // A/m, A/(m s), A s/m
+struct SweepPoint {
+    Rig rig;
+    Controller controller;
     Eigen::Index settle_periods;   // periods before recording
     std::uint64_t seed;            // measurement noise of this point
 };
@@ -30,10 +31,9 @@ struct SweepEstimates {
     Eigen::Index periods = 0, blocks = 0;
 };
 
-// Runs every point (base's fs, cutoff and delay; the point's gains). workers <= 0 means one thread
-// per hardware core.
-SweepEstimates run_sweep(const Rig& rig, const Pid& base, const Eigen::Ref<const Eigen::VectorXd>& period_force,
-                         const std::vector<GainPoint>& points, Eigen::Index periods, LinePlan plan, int median_window,
-                         int workers);
+// Runs every point. All points share the sample rate fs (Hz) and the known mass of eq. 9 (kg).
+// workers <= 0 means one thread per hardware core.
+SweepEstimates run_sweep(const Eigen::Ref<const Eigen::VectorXd>& period_force, const std::vector<SweepPoint>& points,
+                         Eigen::Index periods, LinePlan plan, int median_window, int workers);
 
 }  // namespace amb_fast

@@ -1,54 +1,101 @@
-// The digital PID of MODEL.md section 2, with its derivative filter and computation delay.
+// The digital controller: any SISO discrete state space at the sample rate, from measured displacement
+// e (m) to current command u (A), plus a whole-sample computation delay. The loops know nothing else
+// about it: a PID, a notch, a lead-lag or their combination all arrive here as (A, B, C, D, delay).
 #pragma once
 
+#include <Eigen/Dense>
+#include <array>
 #include <optional>
 #include <vector>
 
 namespace amb_fast {
 
-struct Pid {
-    double kp = 0.0;   // A/m
-    double ki = 0.0;   // A/(m s)
-    double kd = 0.0;   // A s/m
-    std::optional<double> derivative_cutoff;  // Hz; empty = unfiltered difference
+constexpr int max_controller_order = 24;
+
+// s[k+1] = A s[k] + B e[k],  u[k] = C s[k] + D e[k],  applied `delay` samples later.
+struct Controller {
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(0, 0);  // n x n
+    Eigen::VectorXd B = Eigen::VectorXd::Zero(0);     // n
+    Eigen::VectorXd C = Eigen::VectorXd::Zero(0);     // n
+    double D = 0.0;
     double fs = 4000.0;  // Hz
-    int delay = 1;       // whole samples of computation delay
+    int delay = 0;       // whole samples of computation delay
 
     void validate() const;  // throws std::invalid_argument naming the parameter and the value
+    int order() const { return static_cast<int>(A.rows()); }
     double period() const { return 1.0 / fs; }
-    double filter_pole() const;  // a = exp(-2 pi fd T), 0 without a filter
 };
 
-// The PID law of MODEL.md in the form every loop evaluates it (single runs and batched sweeps alike,
-// so they agree bit for bit): coefficients ki T and kd (1 - a) / T, state I, D and e[k-1].
-struct PidLaw {
-    explicit PidLaw(const Pid& pid)
-        : kp(pid.kp), ki_T(pid.ki * pid.period()), kd_gain(pid.kd * (1.0 - pid.filter_pole()) / pid.period()),
-          a(pid.filter_pole()) {}
+// The digital PID of MODEL.md section 2 (backward-Euler integral, filtered difference derivative) as a
+// Controller: states I, D and e[k-1], each only where its gain is non-zero. The Python layer builds
+// the same matrices (amb_fast.PID.to_controller); this one serves the C++ test driver.
+Controller pid_controller(double kp, double ki, double kd, std::optional<double> derivative_cutoff, double fs,
+                          int delay);
 
-    // u[k] (A) from e[k] (m), updating the state.
-    double operator()(double e, double& integral, double& derivative, double& e_prev) const {
-        return apply(kp, ki_T, kd_gain, a, e, integral, derivative, e_prev);
-    }
-    static double apply(double kp, double ki_T, double kd_gain, double a, double e, double& integral,
-                        double& derivative, double& e_prev) {
-        integral += ki_T * e;
-        derivative = a * derivative + kd_gain * (e - e_prev);
-        e_prev = e;
-        return kp * e + integral + derivative;
+// Controllers are evaluated at a compile-time capacity N >= order, padded with zero coefficients: the
+// padding adds exact zeros, so the numbers do not depend on N, and small controllers stay in registers.
+inline int controller_capacity(int order) { return order <= 4 ? 4 : order <= 8 ? 8 : order <= 16 ? 16 : 24; }
+
+// The coefficients padded to capacity N, in the order every loop reads them.
+template <int N>
+struct ControlLaw {
+    explicit ControlLaw(const Controller& c) {
+        A.fill(0.0), B.fill(0.0), C.fill(0.0);
+        const int n = c.order();
+        for (int i = 0; i < n; ++i) {
+            B[i] = c.B[i], C[i] = c.C[i];
+            for (int j = 0; j < n; ++j) A[i * N + j] = c.A(i, j);
+        }
+        D = c.D;
     }
 
-    double kp, ki_T, kd_gain, a;
+    // u[k] from e[k], advancing the state s. The output's sum over the state does not wait for e, so
+    // only one product and one sum stand between the measurement and the command. Every loop (single
+    // runs and each lane of a sweep) performs these operations in this order, so all agree bit for bit.
+    double operator()(double e, double* s) const {
+        double cs = C[0] * s[0];
+        for (int j = 1; j < N; ++j) cs += C[j] * s[j];
+        std::array<double, N> next;
+        for (int i = 0; i < N; ++i) {
+            double acc = A[i * N] * s[0];
+            for (int j = 1; j < N; ++j) acc += A[i * N + j] * s[j];
+            next[i] = acc + B[i] * e;
+        }
+        for (int i = 0; i < N; ++i) s[i] = next[i];
+        return cs + D * e;
+    }
+
+    std::array<double, N * N> A;
+    std::array<double, N> B, C;
+    double D;
 };
 
-// Controller state: backward-Euler integral, filtered difference derivative, a delay line of u.
-class DigitalPid {
+// The controller with its state and its delay line, for single runs.
+class DigitalController {
 public:
-    explicit DigitalPid(const Pid& pid);
+    explicit DigitalController(const Controller& c);
 
-    // Reads e[k] (m) and returns the current command held over [kT, (k+1)T): u[k - delay] (A).
-    double step(double e) {
-        const double u = law_(e, integral_, derivative_, e_prev_);
+    // Reads e[k] (m) and returns the command held over [kT, (k+1)T): u[k - delay] (A).
+    template <int N>
+    double step(const ControlLaw<N>& law, double e) {
+        return delayed(law(e, state_.data()));
+    }
+    // The same for any capacity, chosen per call (the non-linear loop, where it costs nothing).
+    double step(double e);
+
+    template <int N>
+    const ControlLaw<N>& law() const {
+        if constexpr (N == 4) return *law4_;
+        else if constexpr (N == 8) return *law8_;
+        else if constexpr (N == 16) return *law16_;
+        else return *law24_;
+    }
+    int capacity() const { return capacity_; }
+    const Controller& controller() const { return controller_; }
+    double* state() { return state_.data(); }
+
+private:
+    double delayed(double u) {
         if (delay_line_.empty()) return u;
         const double held = delay_line_[head_];
         delay_line_[head_] = u;
@@ -56,11 +103,15 @@ public:
         return held;
     }
 
-private:
-    PidLaw law_;
-    double integral_ = 0.0, derivative_ = 0.0, e_prev_ = 0.0;
+    Controller controller_;
+    int capacity_;
+    std::array<double, max_controller_order> state_{};
     std::vector<double> delay_line_;
     std::size_t head_ = 0;
+    std::optional<ControlLaw<4>> law4_;
+    std::optional<ControlLaw<8>> law8_;
+    std::optional<ControlLaw<16>> law16_;
+    std::optional<ControlLaw<24>> law24_;
 };
 
 }  // namespace amb_fast

@@ -20,7 +20,7 @@ inline Eigen::Index periods_per_block(Eigen::Index periods) {
 
 // Repeats one period of excitation force (N, plan.period samples) for settle_periods, then records
 // `periods` more into the estimator.
-LineEstimate run_experiment(const Rig& rig, const Pid& pid, const Eigen::Ref<const Eigen::VectorXd>& period_force,
+LineEstimate run_experiment(const Rig& rig, const Controller& controller, const Eigen::Ref<const Eigen::VectorXd>& period_force,
                             Eigen::Index settle_periods, Eigen::Index periods, LinePlan plan, std::uint64_t seed,
                             int median_window);
 

@@ -1,4 +1,4 @@
-// The sampled-data closed loop: plant between samples, PID at the samples, noisy measurements.
+// The sampled-data closed loop: plant between samples, the controller at the samples, noisy measurements.
 #pragma once
 
 #include <Eigen/Dense>
@@ -6,10 +6,10 @@
 #include <cmath>
 #include <cstdint>
 #include <optional>
-#include <random>
 
 #include "amb_fast/controller.hpp"
 #include "amb_fast/plant.hpp"
+#include "amb_fast/random.hpp"
 
 namespace amb_fast {
 
@@ -49,7 +49,7 @@ struct Channels {
 class Loop {
 public:
     // The seed fixes the measurement noise; it is unused when the rig has none.
-    Loop(const Rig& rig, const Pid& pid, std::uint64_t seed = 0);
+    Loop(const Rig& rig, const Controller& controller, std::uint64_t seed = 0);
 
     // Advances n samples of zero-order-held force (N) and records them. Throws Touchdown when the
     // platform reaches its clearance, std::overflow_error if the state stops being finite.
@@ -62,14 +62,16 @@ private:
     static constexpr Eigen::Index chunk = 1024;  // noise is drawn a chunk at a time
 
     void run_linear(const double* force, Eigen::Index n, Channels out, const double* noise);
-    template <int sensed, bool has_amp, bool checked>
+    template <int N>
+    void run_linear(const double* force, Eigen::Index n, Channels out, const double* noise);
+    template <int N, int sensed, bool has_amp, bool checked>
     void run_linear(const double* force, Eigen::Index n, Channels out, const double* noise);
     void run_nonlinear(const double* force, Eigen::Index n, Channels out, const double* noise);
     void advance_nonlinear(AugmentedVector& X) const;
     [[noreturn]] void fail(Eigen::Index sample, const char* what) const;
 
     Rig rig_;
-    DigitalPid pid_;
+    DigitalController controller_;
     double T_;
     int sensed_;         // state read by the sensor: ys, or y itself
     bool has_amp_;       // coil current is a state, or the command itself
@@ -84,15 +86,14 @@ private:
     double touchdown_;  // |y| of touchdown (m), may be infinite
     Eigen::Index saturated_ = 0;
     // One stream per noise source, so the draws do not depend on how a run is cut into chunks.
-    std::mt19937_64 sensor_rng_, force_rng_;
-    std::normal_distribution<double> sensor_normal_, force_normal_;
-    Eigen::VectorXd sensor_noise_ = Eigen::VectorXd::Zero(chunk);
+    NormalStream sensor_rng_, force_rng_;
+    Eigen::VectorXd sensor_noise_ = Eigen::VectorXd::Zero(chunk), force_noise_ = Eigen::VectorXd::Zero(chunk);
     ForceTransducer transducer_;
 };
 
 // Runs the loop from rest on n force samples (N) and records the channels. Throws
 // std::invalid_argument on a non-finite force sample.
-void simulate(const Rig& rig, const Pid& pid, const double* force, Eigen::Index n, Channels out,
+void simulate(const Rig& rig, const Controller& controller, const double* force, Eigen::Index n, Channels out,
               std::uint64_t seed = 0);
 
 }  // namespace amb_fast

@@ -40,6 +40,15 @@ struct Rig {
     double command_limit() const;
     // Force of the magnet pair on the platform (N) at displacement y (m) and control current i (A).
     double magnet_force(double y, double i) const;
+
+    bool operator==(const Rig& o) const {
+        return mass == o.mass && kyy == o.kyy && kiy == o.kiy && bias_current == o.bias_current &&
+               force_law == o.force_law && amp_bandwidth == o.amp_bandwidth && eddy_bandwidth == o.eddy_bandwidth &&
+               sensor_bandwidth == o.sensor_bandwidth && substeps == o.substeps && sensor_noise == o.sensor_noise &&
+               force_noise == o.force_noise && mass_loading == o.mass_loading &&
+               force_coupling_tau == o.force_coupling_tau && clearance == o.clearance &&
+               current_limit == o.current_limit;
+    }
 };
 
 // The differential magnet pair of MODEL.md section 4, its constants worked out once:
