@@ -127,7 +127,7 @@ void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* poi
         const ControlLaw<N> law(points[g].controller);
         for (int r = 0; r < N; ++r) {
             lane.B[r * n + g] = law.B[r], lane.C[r * n + g] = law.C[r];
-            for (int j = 0; j < N; ++j) lane.A[(r * N + j) * n + g] = law.A[r * N + j];
+            for (int j = 0; j < N; ++j) lane.A[(r * N + j) * n + g] = law.At[j * N + r];
         }
         lane.D[g] = law.D;
     }
@@ -227,12 +227,9 @@ void run_points(const Eigen::VectorXd& period_force, const SweepPoint* points, E
         while (lanes < lanes_per_group && start + lanes < count && same_group(head, points[start + lanes])) ++lanes;
         const SweepPoint* group = points + start;
         const Eigen::Index row = first_row + start;
-        switch (controller_capacity(head.controller.order())) {
-            case 4: run_linear_group<4>(period_force, group, lanes, periods, plan, median_window, out, row); break;
-            case 8: run_linear_group<8>(period_force, group, lanes, periods, plan, median_window, out, row); break;
-            case 16: run_linear_group<16>(period_force, group, lanes, periods, plan, median_window, out, row); break;
-            default: run_linear_group<24>(period_force, group, lanes, periods, plan, median_window, out, row); break;
-        }
+        with_capacity(controller_capacity(head.controller.order()), [&](auto N) {
+            run_linear_group<N>(period_force, group, lanes, periods, plan, median_window, out, row);
+        });
         start += lanes;
     }
 }

@@ -24,8 +24,8 @@ Controller pid_controller(double kp, double ki, double kd, std::optional<double>
     const double T = 1.0 / fs;
     const double a = derivative_cutoff ? std::exp(-2.0 * M_PI * *derivative_cutoff * T) : 0.0;
     const double kd_gain = kd * (1.0 - a) / T;
-    const bool has_i = ki != 0.0, has_d = kd != 0.0 && a != 0.0, has_e = kd != 0.0;
-    const int n = int(has_i) + int(has_d) + int(has_e);
+    const bool has_i = ki != 0.0, has_d = kd != 0.0;
+    const int n = int(has_i) + int(has_d);
     Controller c;
     c.A = Eigen::MatrixXd::Zero(n, n);
     c.B = Eigen::VectorXd::Zero(n);
@@ -33,10 +33,9 @@ Controller pid_controller(double kp, double ki, double kd, std::optional<double>
     c.D = kp + ki * T + kd_gain;
     c.fs = fs;
     c.delay = delay;
-    const int I = 0, Dd = int(has_i), E = int(has_i) + int(has_d);
-    if (has_i) c.A(I, I) = 1.0, c.B[I] = ki * T, c.C[I] = 1.0;
-    if (has_d) c.A(Dd, Dd) = a, c.A(Dd, E) = -kd_gain, c.B[Dd] = kd_gain, c.C[Dd] = a;
-    if (has_e) c.B[E] = 1.0, c.C[E] = -kd_gain;
+    if (has_i) c.A(0, 0) = 1.0, c.B[0] = ki * T, c.C[0] = 1.0;
+    const int d = int(has_i);
+    if (has_d) c.A(d, d) = a, c.B[d] = 1.0, c.C[d] = kd_gain * (a - 1.0);
     return c;
 }
 
@@ -44,21 +43,18 @@ DigitalController::DigitalController(const Controller& c)
     : controller_(validated(c)),
       capacity_(controller_capacity(c.order())),
       delay_line_(static_cast<std::size_t>(c.delay), 0.0) {
-    switch (capacity_) {
-        case 4: law4_.emplace(c); break;
-        case 8: law8_.emplace(c); break;
-        case 16: law16_.emplace(c); break;
-        default: law24_.emplace(c); break;
-    }
+    with_capacity(capacity_, [&](auto N) {
+        if constexpr (N == 2) law2_.emplace(c);
+        else if constexpr (N == 4) law4_.emplace(c);
+        else if constexpr (N == 6) law6_.emplace(c);
+        else if constexpr (N == 8) law8_.emplace(c);
+        else if constexpr (N == 16) law16_.emplace(c);
+        else law24_.emplace(c);
+    });
 }
 
 double DigitalController::step(double e) {
-    switch (capacity_) {
-        case 4: return step(*law4_, e);
-        case 8: return step(*law8_, e);
-        case 16: return step(*law16_, e);
-        default: return step(*law24_, e);
-    }
+    return with_capacity(capacity_, [&](auto N) { return step(law<N>(), e); });
 }
 
 }  // namespace amb_fast

@@ -54,12 +54,7 @@ void Loop::run(const double* force, Eigen::Index n, Channels out) {
 // clearance is to be watched are compile-time constants in the kernel, so the state stays in
 // registers and the common case pays for no checks.
 void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise) {
-    switch (controller_.capacity()) {
-        case 4: return run_linear<4>(force, n, out, noise);
-        case 8: return run_linear<8>(force, n, out, noise);
-        case 16: return run_linear<16>(force, n, out, noise);
-        default: return run_linear<24>(force, n, out, noise);
-    }
+    with_capacity(controller_.capacity(), [&](auto N) { run_linear<N>(force, n, out, noise); });
 }
 
 template <int N>
@@ -84,13 +79,14 @@ void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const d
     using namespace state;
     const CascadeMap& map = *map_;
     const ControlLaw<N>& law = controller_.law<N>();
+    double* s = controller_.state();
     double xy = x_[y], xv = x_[v], xi = x_[i], xf = x_[i_f], xs = x_[ys];
     const double limit = limit_, touchdown = touchdown_;
     const bool has_clearance = std::isfinite(touchdown);  // else a diverging y (Inf) is no touchdown
     Eigen::Index saturated = 0;
     for (Eigen::Index j = 0; j < n; ++j) {
         const double e = (sensed == ys ? xs : xy) + noise[j];
-        const double wanted = controller_.step(law, e);
+        const double wanted = controller_.delayed(law(e, s));
         // The amplifier's limit (with none, clamping to +-Inf would change nothing, not even a bit).
         const double u = checked ? std::clamp(wanted, -limit, limit) : wanted;
         if constexpr (checked) saturated += u != wanted;

@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <array>
 #include <optional>
+#include <type_traits>
 #include <vector>
 
 namespace amb_fast {
@@ -27,24 +28,41 @@ struct Controller {
 };
 
 // The digital PID of MODEL.md section 2 (backward-Euler integral, filtered difference derivative) as a
-// Controller: states I, D and e[k-1], each only where its gain is non-zero. The Python layer builds
+// Controller in modal form: the integral's state (pole 1) and the derivative's (pole a), each only
+// where its gain is non-zero. The Python layer builds
 // the same matrices (amb_fast.PID.to_controller); this one serves the C++ test driver.
 Controller pid_controller(double kp, double ki, double kd, std::optional<double> derivative_cutoff, double fs,
                           int delay);
 
 // Controllers are evaluated at a compile-time capacity N >= order, padded with zero coefficients: the
 // padding adds exact zeros, so the numbers do not depend on N, and small controllers stay in registers.
-inline int controller_capacity(int order) { return order <= 4 ? 4 : order <= 8 ? 8 : order <= 16 ? 16 : 24; }
+inline int controller_capacity(int order) {
+    return order <= 2 ? 2 : order <= 4 ? 4 : order <= 6 ? 6 : order <= 8 ? 8 : order <= 16 ? 16 : 24;
+}
 
-// The coefficients padded to capacity N, in the order every loop reads them.
+// Calls f(std::integral_constant<int, N>{}) with the capacity N as a compile-time constant.
+template <class F>
+decltype(auto) with_capacity(int capacity, F&& f) {
+    switch (capacity) {
+        case 2: return f(std::integral_constant<int, 2>{});
+        case 4: return f(std::integral_constant<int, 4>{});
+        case 6: return f(std::integral_constant<int, 6>{});
+        case 8: return f(std::integral_constant<int, 8>{});
+        case 16: return f(std::integral_constant<int, 16>{});
+        default: return f(std::integral_constant<int, 24>{});
+    }
+}
+
+// The coefficients padded to capacity N, A by columns (At[j N + i] = A(i, j)) so that the state update
+// runs down whole columns, which vectorises.
 template <int N>
 struct ControlLaw {
     explicit ControlLaw(const Controller& c) {
-        A.fill(0.0), B.fill(0.0), C.fill(0.0);
+        At.fill(0.0), B.fill(0.0), C.fill(0.0);
         const int n = c.order();
         for (int i = 0; i < n; ++i) {
             B[i] = c.B[i], C[i] = c.C[i];
-            for (int j = 0; j < n; ++j) A[i * N + j] = c.A(i, j);
+            for (int j = 0; j < n; ++j) At[j * N + i] = c.A(i, j);
         }
         D = c.D;
     }
@@ -52,20 +70,19 @@ struct ControlLaw {
     // u[k] from e[k], advancing the state s. The output's sum over the state does not wait for e, so
     // only one product and one sum stand between the measurement and the command. Every loop (single
     // runs and each lane of a sweep) performs these operations in this order, so all agree bit for bit.
+    // Each state's new value is ((A(i,0) s0 + A(i,1) s1) + ...) + B(i) e, summed in that order.
     double operator()(double e, double* s) const {
         double cs = C[0] * s[0];
         for (int j = 1; j < N; ++j) cs += C[j] * s[j];
         std::array<double, N> next;
-        for (int i = 0; i < N; ++i) {
-            double acc = A[i * N] * s[0];
-            for (int j = 1; j < N; ++j) acc += A[i * N + j] * s[j];
-            next[i] = acc + B[i] * e;
-        }
-        for (int i = 0; i < N; ++i) s[i] = next[i];
+        for (int i = 0; i < N; ++i) next[i] = At[i] * s[0];
+        for (int j = 1; j < N; ++j)
+            for (int i = 0; i < N; ++i) next[i] += At[j * N + i] * s[j];
+        for (int i = 0; i < N; ++i) s[i] = next[i] + B[i] * e;
         return cs + D * e;
     }
 
-    std::array<double, N * N> A;
+    std::array<double, N * N> At;
     std::array<double, N> B, C;
     double D;
 };
@@ -85,7 +102,9 @@ public:
 
     template <int N>
     const ControlLaw<N>& law() const {
-        if constexpr (N == 4) return *law4_;
+        if constexpr (N == 2) return *law2_;
+        else if constexpr (N == 4) return *law4_;
+        else if constexpr (N == 6) return *law6_;
         else if constexpr (N == 8) return *law8_;
         else if constexpr (N == 16) return *law16_;
         else return *law24_;
@@ -94,7 +113,7 @@ public:
     const Controller& controller() const { return controller_; }
     double* state() { return state_.data(); }
 
-private:
+    // Puts u[k] (A) into the delay line and returns u[k - delay].
     double delayed(double u) {
         if (delay_line_.empty()) return u;
         const double held = delay_line_[head_];
@@ -103,12 +122,15 @@ private:
         return held;
     }
 
+private:
     Controller controller_;
     int capacity_;
     std::array<double, max_controller_order> state_{};
     std::vector<double> delay_line_;
     std::size_t head_ = 0;
+    std::optional<ControlLaw<2>> law2_;
     std::optional<ControlLaw<4>> law4_;
+    std::optional<ControlLaw<6>> law6_;
     std::optional<ControlLaw<8>> law8_;
     std::optional<ControlLaw<16>> law16_;
     std::optional<ControlLaw<24>> law24_;
