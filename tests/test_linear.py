@@ -68,7 +68,7 @@ def test_stability_margin_zones() -> None:
 
 def test_poles_of_a_lightly_damped_loop_are_inside_the_unit_circle(lagged_rig, pid) -> None:
     poles = af.closed_loop_poles(lagged_rig, pid)
-    assert poles.size == 5 + 3 + 1  # plant, PID (integral, filter, memory), one delay
+    assert poles.size == 5 + 2 + 1  # plant, PID (integral, filtered derivative), one delay
     assert np.all(np.abs(poles) < 1)
     with pytest.raises(ValueError, match="freq must be"):
         af.predict(lagged_rig, pid, [10.0, 2500.0])

@@ -197,102 +197,21 @@ class PID:
         T = 1.0 / self.fs
         a = float(np.exp(-2 * np.pi * self.derivative_cutoff * T)) if self.derivative_cutoff is not None else 0.0
         kd_gain = self.kd * (1 - a) / T
-        poles, inputs, outputs = [], [], []
+        poles: list[float] = []
+        inputs: list[float] = []
+        outputs: list[float] = []
         if self.ki != 0:
-            poles.append(1.0), inputs.append(self.ki * T), outputs.append(1.0)
+            poles.append(1.0)
+            inputs.append(self.ki * T)
+            outputs.append(1.0)
         if self.kd != 0:
-            poles.append(a), inputs.append(1.0), outputs.append(kd_gain * (a - 1.0))
+            poles.append(a)
+            inputs.append(1.0)
+            outputs.append(kd_gain * (a - 1.0))
         m = len(poles)
-        return (np.diag(poles).reshape(m, m), np.array(inputs, dtype=float).reshape(m, 1),
-                np.array(outputs, dtype=float).reshape(1, m), np.array([[self.kp + self.ki * T + kd_gain]]))  # fmt: skip
-
-    def _to_core(self) -> _core.Rig:
-        return _core_rig(self)
-
-    @property
-    def moving_mass(self) -> float:
-        """Mass the dynamics move, kg: ``mass + mass_loading``."""
-        return self.mass + self.mass_loading
-
-
-@dataclass(frozen=True)
-class PID:
-    """The digital PID controller of MODEL.md section 2.
-
-    Parameters
-    ----------
-    kp, ki, kd : float
-        Gains from measured displacement to control current: A/m, A/(m s), A s/m.
-    derivative_cutoff : float or None
-        Corner of the first-order derivative filter, Hz; ``None`` = plain backward difference.
-    fs : float
-        Sampling frequency, Hz.
-    delay : int
-        Computation delay, whole samples.
-    """
-
-    kp: float
-    ki: float
-    kd: float
-    derivative_cutoff: float | None = None
-    fs: float = 4000.0
-    delay: int = 1
-
-    def __post_init__(self) -> None:
-        real("kp", self.kp, "A/m")
-        real("ki", self.ki, "A/(m s)")
-        real("kd", self.kd, "A s/m")
-        optional_positive("derivative_cutoff", self.derivative_cutoff, "Hz")
-        real("fs", self.fs, "Hz", positive=True)
-        integer("delay", self.delay, 0)
-
-    @classmethod
-    def paper(cls) -> PID:
-        """Baseline gains for the paper's rig (which does not state its own): kp = 2400 A/m gives a
-        net stiffness Kiy kp + Kyy = 60 kN/m and a natural frequency near 38 Hz, mid-band of the
-        1-200 Hz excitation; kd = 3 A s/m (about 140 N s/m, damping ratio near 0.3), filtered at
-        1 kHz; ki = 20000 A/(m s) puts the integral corner ki/kp near 1.3 Hz, well below resonance.
-        Stable with any one gain anywhere from 0.67x to 1.5x (tested). No whole-sample computation
-        delay: the DS1103 computes a PID within a few tens of microseconds of the sample, a small
-        fraction of the 250 us period (the zero-order hold's half sample remains).
-        """
-        return cls(kp=2400.0, ki=20000.0, kd=3.0, derivative_cutoff=1000.0, fs=4000.0, delay=0)
-
-    def to_controller(self) -> Controller:
-        """This PID as a general :class:`~amb_fast.Controller`: the same difference equations (a run
-        with either is bit for bit the same), its continuous design ``kp + ki/s + kd s/(1 + s/wd)``
-        and its parameters ``kp``, ``ki``, ``kd``, ``derivative_cutoff`` for sweeps and design."""
-        from .controllers import pid_controller
-
-        return pid_controller(self)
-
-    def state_space(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The digital PID without its delay as ``(A, B, C, D)`` from e[k] (m) to u[k] (A).
-
-        States: the integral I, the filtered derivative D and the previous error E, each only where
-        it carries something (no ``ki``: no I; no ``kd``: no D, E; no cutoff: no D). The law is
-        ``I += ki T e``, ``D = a D + kd (1 - a)/T (e - E)``, ``u = kp e + I + D`` with
-        ``a = exp(-2 pi fd T)`` (0 without a filter).
-        """
-        T = 1.0 / self.fs
-        a = np.exp(-2 * np.pi * self.derivative_cutoff * T) if self.derivative_cutoff is not None else 0.0
-        kd_gain = self.kd * (1 - a) / T
-        names = [n for n, on in (("I", self.ki != 0), ("D", self.kd != 0 and a != 0), ("E", self.kd != 0)) if on]
-        m = len(names)
-        A, B, C = np.zeros((m, m)), np.zeros((m, 1)), np.zeros((1, m))
-        idx = {name: j for j, name in enumerate(names)}
-        if "I" in idx:
-            A[idx["I"], idx["I"]] = 1.0
-            B[idx["I"], 0] = self.ki * T
-            C[0, idx["I"]] = 1.0
-        if "D" in idx:
-            A[idx["D"], idx["D"]] = a
-            A[idx["D"], idx["E"]] = -kd_gain
-            B[idx["D"], 0] = kd_gain
-            C[0, idx["D"]] = a
-        if "E" in idx:
-            B[idx["E"], 0] = 1.0
-            C[0, idx["E"]] = -kd_gain
+        A = np.diag(poles).reshape(m, m)
+        B = np.array(inputs, dtype=float).reshape(m, 1)
+        C = np.array(outputs, dtype=float).reshape(1, m)
         return A, B, C, np.array([[self.kp + self.ki * T + kd_gain]])
 
     def _to_core(self) -> _core.Controller:
