@@ -35,7 +35,7 @@ void bind_spectrum(py::module_& m) {
 
     m.def("run_experiment", &run_experiment, py::arg("rig"), py::arg("controller"), py::arg("period_force"),
           py::arg("settle_periods"), py::arg("periods"), py::arg("plan"), py::arg("seed"), py::arg("median_window"),
-          py::call_guard<py::gil_scoped_release>(),
+          py::arg("steady_start") = false, py::call_guard<py::gil_scoped_release>(),
           "Simulates settle + periods of the repeated excitation and estimates, keeping no time series.");
 
     m.def(

@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "amb_fast/errors.hpp"
+#include "amb_fast/steady.hpp"
 
 namespace amb_fast {
 
@@ -108,11 +109,62 @@ void step_lanes(Lanes& L, std::size_t head, const double* __restrict noise, doub
     }
 }
 
+// Every lane in the periodic steady state, exactly as Loop::start_periodic puts a single run there: one
+// period from rest without noise or limits by the same kernel, then z0 = M^N z0 + zN per lane, the
+// stationary noise state drawn from the point's own stream, and the transducer's steady state.
+template <int N, int sensed>
+void start_lanes_periodic(Lanes& lane, const SweepPoint* points, const Eigen::VectorXd& period_force,
+                          const CascadeMap& map, ForceTransducer& transducer) {
+    const Rig& rig = points[0].rig;
+    const int d = points[0].controller.delay;
+    const std::size_t n = lane.n;
+    const Eigen::Index L = period_force.size();
+    Lanes probe(static_cast<Eigen::Index>(n), N, d);
+    probe.A = lane.A, probe.B = lane.B, probe.C = lane.C, probe.D = lane.D;
+    std::vector<double> quiet(n, 0.0), scratch(n);
+    std::size_t head = 0;
+    const double none = std::numeric_limits<double>::infinity();
+    for (Eigen::Index j = 0; j < L; ++j) {
+        d > 0 ? step_lanes<N, sensed, true, false>(probe, head, quiet.data(), scratch.data(), map, none, period_force[j])
+              : step_lanes<N, sensed, false, false>(probe, head, quiet.data(), scratch.data(), map, none, period_force[j]);
+        if (d > 0 && ++head == static_cast<std::size_t>(d)) head = 0;
+    }
+    Rig linear = rig;  // what the single run's probe sees
+    linear.force_law = ForceLaw::linear;
+    linear.sensor_noise = linear.force_noise = 0.0;
+    linear.clearance.reset();
+    linear.current_limit.reset();
+    ForceTransducer settled(rig, points[0].controller.period());
+    Eigen::VectorXd recorded(L);
+    settled.record(period_force.data(), L, recorded.data());
+    transducer.set_state(periodic_transducer_start(transducer.pole(), L, settled.state()));
+    for (std::size_t g = 0; g < n; ++g) {
+        const Controller& c = points[g].controller;
+        const int order = c.order();
+        Eigen::VectorXd z(state::size + order + d);
+        z.head<state::size>() << probe.y[g], probe.v[g], probe.i[g], probe.f[g], probe.s[g];
+        for (int j = 0; j < order; ++j) z[state::size + j] = probe.state[static_cast<std::size_t>(j) * n + g];
+        for (int j = 0; j < d; ++j)
+            z[state::size + order + j] = probe.held[((head + static_cast<std::size_t>(j)) % static_cast<std::size_t>(d)) * n + g];
+        const ClosedLoopMap loop(linear, c);
+        z = periodic_start(loop.M, L, z);
+        if (rig.sensor_noise > 0.0) {
+            NormalStream draws(start_noise_seed(points[g].seed));
+            Eigen::VectorXd w(z.size());
+            draws.fill(w.data(), w.size(), 1.0);
+            z += stationary_noise_root(loop.M, loop.noise_in, rig.sensor_noise) * w;
+        }
+        lane.y[g] = z[0], lane.v[g] = z[1], lane.i[g] = z[2], lane.f[g] = z[3], lane.s[g] = z[4];
+        for (int j = 0; j < order; ++j) lane.state[static_cast<std::size_t>(j) * n + g] = z[state::size + j];
+        for (int j = 0; j < d; ++j) lane.held[static_cast<std::size_t>(j) * n + g] = z[state::size + order + j];
+    }
+}
+
 // A group of linear points in lock step (one rig; controllers of one capacity N and one delay).
 template <int N, int sensed>
 void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* points, Eigen::Index lanes,
-                      Eigen::Index periods, const LinePlan& plan, int median_window, SweepEstimates& out,
-                      Eigen::Index first_row) {
+                      Eigen::Index periods, const LinePlan& plan, int median_window, bool steady_start,
+                      SweepEstimates& out, Eigen::Index first_row) {
     const Rig& rig = points[0].rig;
     const Controller& first = points[0].controller;
     const Eigen::Index L = period_force.size();
@@ -146,6 +198,7 @@ void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* poi
     }
     std::vector<bool> touched(n, false);
     std::size_t head = 0;
+    if (steady_start) start_lanes_periodic<N, sensed>(lane, points, period_force, map, transducer);
 
     for (Eigen::Index p = 0; p < last; ++p) {
         if (rig.sensor_noise > 0.0)
@@ -199,16 +252,19 @@ void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* poi
 
 template <int N>
 void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* points, Eigen::Index lanes,
-                      Eigen::Index periods, const LinePlan& plan, int median_window, SweepEstimates& out,
-                      Eigen::Index first_row) {
+                      Eigen::Index periods, const LinePlan& plan, int median_window, bool steady_start,
+                      SweepEstimates& out, Eigen::Index first_row) {
     if (points[0].rig.sensor_bandwidth)
-        run_linear_group<N, state::ys>(period_force, points, lanes, periods, plan, median_window, out, first_row);
+        run_linear_group<N, state::ys>(period_force, points, lanes, periods, plan, median_window, steady_start, out,
+                                       first_row);
     else
-        run_linear_group<N, state::y>(period_force, points, lanes, periods, plan, median_window, out, first_row);
+        run_linear_group<N, state::y>(period_force, points, lanes, periods, plan, median_window, steady_start, out,
+                                      first_row);
 }
 
 void run_points(const Eigen::VectorXd& period_force, const SweepPoint* points, Eigen::Index count, Eigen::Index periods,
-                const LinePlan& plan, int median_window, SweepEstimates& out, Eigen::Index first_row) {
+                const LinePlan& plan, int median_window, bool steady_start, SweepEstimates& out,
+                Eigen::Index first_row) {
     Eigen::Index start = 0;
     while (start < count) {
         const SweepPoint& head = points[start];
@@ -216,7 +272,7 @@ void run_points(const Eigen::VectorXd& period_force, const SweepPoint* points, E
             try {
                 store(out, first_row + start,
                       run_experiment(head.rig, head.controller, period_force, head.settle_periods, periods, plan,
-                                     head.seed, median_window));
+                                     head.seed, median_window, steady_start));
             } catch (const Touchdown&) {
                 out.status[first_row + start] = static_cast<int>(PointStatus::touchdown);
             }
@@ -228,7 +284,7 @@ void run_points(const Eigen::VectorXd& period_force, const SweepPoint* points, E
         const SweepPoint* group = points + start;
         const Eigen::Index row = first_row + start;
         with_capacity(controller_capacity(head.controller.order()), [&](auto N) {
-            run_linear_group<N>(period_force, group, lanes, periods, plan, median_window, out, row);
+            run_linear_group<N>(period_force, group, lanes, periods, plan, median_window, steady_start, out, row);
         });
         start += lanes;
     }
@@ -237,7 +293,7 @@ void run_points(const Eigen::VectorXd& period_force, const SweepPoint* points, E
 }  // namespace
 
 SweepEstimates run_sweep(const Eigen::Ref<const Eigen::VectorXd>& period_force, const std::vector<SweepPoint>& points,
-                         Eigen::Index periods, LinePlan plan, int median_window, int workers) {
+                         Eigen::Index periods, LinePlan plan, int median_window, int workers, bool steady_start) {
     const Eigen::Index L = plan.period;
     require(period_force.size() == L, "excitation length", period_force.size(), "one period of plan.period samples");
     require_finite_samples("excitation", period_force.data(), L);
@@ -275,7 +331,7 @@ SweepEstimates run_sweep(const Eigen::Ref<const Eigen::VectorXd>& period_force, 
         const Eigen::Index begin = n * w / workers, end = n * (w + 1) / workers;
         threads.emplace_back([&, w, begin, end] {
             try {
-                run_points(force, points.data() + begin, end - begin, periods, plan, median_window, out, begin);
+                run_points(force, points.data() + begin, end - begin, periods, plan, median_window, steady_start, out, begin);
             } catch (...) {
                 errors[static_cast<std::size_t>(w)] = std::current_exception();
             }

@@ -8,7 +8,7 @@ namespace amb_fast {
 
 LineEstimate run_experiment(const Rig& rig, const Controller& controller, const Eigen::Ref<const Eigen::VectorXd>& period_force,
                             Eigen::Index settle_periods, Eigen::Index periods, LinePlan plan, std::uint64_t seed,
-                            int median_window) {
+                            int median_window, bool steady_start) {
     const Eigen::Index L = plan.period;
     require(period_force.size() == L, "excitation length", period_force.size(), "one period of plan.period samples");
     require_finite_samples("excitation", period_force.data(), L);
@@ -16,6 +16,7 @@ LineEstimate run_experiment(const Rig& rig, const Controller& controller, const 
     require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
     plan.periods_per_block = periods_per_block(periods);
     Loop loop(rig, controller, seed);
+    if (steady_start) loop.start_periodic(period_force.data(), L);
     PeriodEstimator estimator(plan);
     Eigen::VectorXd force(L), displacement(L), current(L);
     Eigen::Index saturated_before_recording = 0;

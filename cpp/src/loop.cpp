@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "amb_fast/errors.hpp"
+#include "amb_fast/steady.hpp"
 
 namespace amb_fast {
 
@@ -19,6 +20,7 @@ Loop::Loop(const Rig& rig, const Controller& controller, std::uint64_t seed)
       magnets_(rig),
       limit_(rig.command_limit()),
       touchdown_(rig.touchdown_at()),
+      seed_(seed),
       sensor_rng_(seed),
       force_rng_(seed ^ 0x9e3779b97f4a7c15ULL),
       transducer_(rig, controller.period()) {
@@ -148,6 +150,46 @@ void Loop::advance_nonlinear(AugmentedVector& X) const {
         X = full + (h / 6.0) * (a * E.col(v) + 2.0 * (b + c) * E2.col(v));
         X[v] += (h / 6.0) * dd;
     }
+}
+
+Eigen::VectorXd Loop::stacked_state() const {
+    const Controller& c = controller_.controller();
+    const int n = c.order(), d = c.delay;
+    Eigen::VectorXd z(state::size + n + d);
+    z.head<state::size>() = x_;
+    for (int j = 0; j < n; ++j) z[state::size + j] = controller_.state()[j];
+    for (int j = 0; j < d; ++j) z[state::size + n + j] = controller_.line(j);
+    return z;
+}
+
+void Loop::set_stacked_state(const Eigen::VectorXd& z) {
+    const Controller& c = controller_.controller();
+    const int n = c.order(), d = c.delay;
+    x_ = z.head<state::size>();
+    for (int j = 0; j < n; ++j) controller_.state()[j] = z[state::size + j];
+    for (int j = 0; j < d; ++j) controller_.set_line(j, z[state::size + n + j]);
+}
+
+void Loop::start_periodic(const double* period_force, Eigen::Index L) {
+    // One period from rest of the noise-free linear loop without limits, by the same kernel.
+    Rig quiet = rig_;
+    quiet.force_law = ForceLaw::linear;
+    quiet.sensor_noise = quiet.force_noise = 0.0;
+    quiet.clearance.reset();
+    quiet.current_limit.reset();
+    Loop probe(quiet, controller_.controller());
+    Eigen::VectorXd f(L), y(L), i(L);
+    probe.run(period_force, L, {f.data(), y.data(), i.data()});
+    const ClosedLoopMap map(quiet, controller_.controller());
+    Eigen::VectorXd z = periodic_start(map.M, L, probe.stacked_state());
+    if (rig_.sensor_noise > 0.0) {
+        NormalStream draws(start_noise_seed(seed_));
+        Eigen::VectorXd w(z.size());
+        draws.fill(w.data(), w.size(), 1.0);
+        z += stationary_noise_root(map.M, map.noise_in, rig_.sensor_noise) * w;
+    }
+    set_stacked_state(z);
+    transducer_.set_state(periodic_transducer_start(transducer_.pole(), L, probe.transducer().state()));
 }
 
 void Loop::fail(Eigen::Index sample, const char* what) const {

@@ -140,6 +140,24 @@ int main() {
             same = same && (s.H.row(g).transpose() - e.H).cwiseAbs().maxCoeff() == 0.0 && s.status[g] == 0;
         }
         check(same, "sweep rows equal single runs bit for bit");
+        const SweepEstimates steady = run_sweep(period_force, points, 3, plan, 5, 2, true);
+        bool steady_same = true;
+        for (int g : {0, 17, 36}) {
+            const LineEstimate e = run_experiment(noisy, points[g].controller, period_force, points[g].settle_periods, 3,
+                                                  plan, points[g].seed, 5, true);
+            steady_same = steady_same && (steady.H.row(g).transpose() - e.H).cwiseAbs().maxCoeff() == 0.0;
+        }
+        check(steady_same, "steady-start sweep rows equal single steady-start runs bit for bit");
+    }
+
+    {  // From the periodic steady state, no settling: the first periods already equal the exact response.
+        const LineEstimate e = run_experiment(rig, ctrl, period_force, 0, 2, plan, 0, 5, true);
+        double worst = 0.0;
+        for (int n = 1; n <= lines; ++n) {
+            const cd exact = receptance(rig, pid, n, static_cast<double>(L));
+            worst = std::max(worst, std::abs(1.0 / e.H[n - 1] - exact) / std::abs(exact));
+        }
+        check(worst < 1e-11, "steady start matches composed transfer functions (" + std::to_string(worst) + ")");
     }
 
     {  // The estimator on known sines: H = F/Y exactly.

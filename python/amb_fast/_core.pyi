@@ -95,6 +95,7 @@ def run_experiment(
     plan: LinePlan,
     seed: int,
     median_window: int,
+    steady_start: bool = False,
 ) -> LineEstimate: ...
 def identify(
     force: ArrayLike,
@@ -115,4 +116,5 @@ def run_sweep(
     plan: LinePlan,
     median_window: int,
     workers: int,
+    steady_start: bool = False,
 ) -> SweepEstimates: ...

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -129,6 +130,25 @@ def _window(median_window: int) -> int:
     return window
 
 
+MAX_AUTOMATIC_SETTLE = 10_000
+
+
+def automatic_settle(rig: Rig, controller: AnyController, radius: float, period: int, start: str) -> int:
+    """Settling periods chosen when none are given: none for a steady start of a linear rig, else
+    enough for the slowest pole to decay below 1e-9; more than 10^4 is refused, naming the pole."""
+    if start == "steady" and rig.force_law == "linear":
+        return 0
+    slowest = float(settling_radius(rig, controller, radius))
+    periods = int(settle_periods_for(np.array(slowest), period))
+    if periods > MAX_AUTOMATIC_SETTLE:
+        raise ValueError(
+            f"settling from {'rest' if start == 'rest' else 'the linearised steady state'} would take {periods} "
+            f"periods (> {MAX_AUTOMATIC_SETTLE}): the slowest pole has |z| = {slowest:.12g}, a stability margin "
+            f"of 1 - |z| = {1 - slowest:.3g} per sample; use start='steady' (linear rigs) or give settle_periods"
+        )
+    return periods
+
+
 def run_experiment(
     rig: Rig,
     controller: AnyController,
@@ -138,16 +158,25 @@ def run_experiment(
     settle_periods: int | None = None,
     seed: int | None = None,
     median_window: int = 5,
+    start: Literal["steady", "rest"] = "steady",
 ) -> Estimate:
     """Simulate the SPHS experiment and estimate k(f), c(f), in one C++ call that keeps no time series.
 
     ``controller``: a :class:`PID` or any :class:`~amb_fast.Controller` (transfer functions, filter
     blocks, python-control systems), at the excitation's sample rate.
 
+    ``start="steady"`` (the default) starts the loop in the periodic steady state of the repeated
+    excitation, solved exactly (``x0 = Phi^N x0 + x_N``), with the noise-driven part of the state drawn
+    from its stationary distribution: no settling is needed, and without noise the recorded periods
+    equal those of an infinitely settled run to rounding, however slow the slowest pole. A non-linear
+    force law starts from the linearised steady state and settles from there. ``start="rest"`` starts
+    from rest, as a real rig does.
+
     The excitation period is repeated for ``settle_periods``, then ``periods`` more are recorded,
-    averaged and transformed. ``settle_periods=None`` takes enough for the slowest pole ``z_max`` of
-    the linearised closed loop (or the force transducer's AC coupling, if slower) to decay below
-    1e-9: ``ceil(ln 1e-9 / ln |z_max| / period) + 1``.
+    averaged and transformed. ``settle_periods=None`` takes 0 for a steady start of a linear rig, else
+    enough for the slowest pole ``z_max`` of the linearised closed loop (or the force transducer's AC
+    coupling, if slower) to decay below 1e-9: ``ceil(ln 1e-9 / ln |z_max| / period) + 1``; more than
+    10^4 periods is refused (``ValueError``).
     ``seed`` fixes the measurement noise. Raises :class:`UnstableLoopError` before simulating a loop
     with a pole on or outside the unit circle, and :class:`TouchdownError` (time, position) if the
     platform reaches its clearance. Amplifier saturation during the recorded periods is counted in
@@ -159,9 +188,10 @@ def run_experiment(
     periods = integer("periods", periods, 2)
     window = _window(median_window)
     period = excitation.period_samples
+    require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
     poles = require_stable(rig, pid)
     if settle_periods is None:  # the same rule as amb_fast.sweep, so a sweep point reruns bit for bit
-        settle_periods = int(settle_periods_for(settling_radius(rig, pid, float(np.max(np.abs(poles)))), period))
+        settle_periods = automatic_settle(rig, pid, float(np.max(np.abs(poles), initial=0.0)), period, start)
     settle_periods = integer("settle_periods", settle_periods, 0)
     harmonics = excitation.harmonics
     plan, unexcited = _plan(harmonics, period)
@@ -174,6 +204,7 @@ def run_experiment(
         plan,
         seed_value(seed),
         window,
+        start == "steady",
     )
     if raw.saturated_samples:
         total = periods * period

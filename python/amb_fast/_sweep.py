@@ -16,8 +16,8 @@ from numpy.typing import ArrayLike
 
 from . import _core
 from ._excitation import Multisine
-from ._experiment import _plan, _window
-from ._linear import AnyController, core_controller, loop_poles, settle_periods_for, settling_radius, spectral_radius
+from ._experiment import _plan, _window, automatic_settle
+from ._linear import AnyController, core_controller, loop_poles, spectral_radius
 from ._params import PID, Rig
 from ._validate import integer, require, seed_value
 
@@ -277,7 +277,7 @@ def point_model(
 def _run_chunk(
     rig: Rig | None, controller: AnyController | None, factory: Factory | None, excitation: Multisine,
     values: dict[str, np.ndarray], seeds: np.ndarray, periods: int, settle_periods: int | None, window: int,
-    workers: int,
+    workers: int, start: str = "steady",
 ) -> dict[str, np.ndarray]:  # fmt: skip
     """One unit of work, for a thread or any executor (picklable arguments, numpy results): each
     point's rig and controller, the stability check (an unstable point is flagged, never simulated),
@@ -298,10 +298,9 @@ def _run_chunk(
         require(c.fs == fs, "controller fs", c.fs, f"equal to the excitation's fs ({fs} Hz)")
     stable = radius < 1.0
     if settle_periods is None:  # the rule of run_experiment, so every point reruns bit for bit
-        slowest = np.array(
-            [settling_radius(r, c, rad if ok else 0.0) for (r, c), rad, ok in zip(models, radius, stable)]
-        )
-        settle = np.where(stable, settle_periods_for(slowest, excitation.period_samples), 0)
+        period = excitation.period_samples
+        settle = np.array([automatic_settle(r, c, float(rad), period, start) if ok else 0
+                           for (r, c), rad, ok in zip(models, radius, stable)])  # fmt: skip
     else:
         settle = np.full(n, settle_periods)
     plan, unexcited = _plan(excitation.harmonics, excitation.period_samples)
@@ -317,7 +316,7 @@ def _run_chunk(
         require(len(masses) == 1, "mass", sorted(masses), "the same at every point of a sweep (kg)")
         core = _core.run_sweep(excitation.samples, [models[j][0]._to_core() for j in rows],
                                [core_controller(models[j][1]) for j in rows], out["settle_periods"][rows],
-                               seeds[rows], periods, plan, window, workers)  # fmt: skip
+                               seeds[rows], periods, plan, window, workers, start == "steady")  # fmt: skip
         for name in _CORE_FIELDS:
             out[name][rows] = np.asarray(getattr(core, name))
     return out
@@ -352,6 +351,7 @@ def sweep(
     seed: int | None = None,
     median_window: int = 5,
     chunk_size: int | None = None,
+    start: Literal["steady", "rest"] = "steady",
     **axes: ArrayLike,
 ) -> SweepResult:
     """Run the experiment of :func:`run_experiment` for many rigs and controllers.
@@ -374,8 +374,10 @@ def sweep(
     :class:`concurrent.futures.Executor` (threads, processes, or a dask cluster's
     ``client.get_executor()``; each chunk then uses ``workers`` core threads, default one). Results
     come back in grid order. ``progress``: a tqdm bar (default: when stderr is a terminal). ``seed`` fixes the
-    measurement noise; each point gets its own seed (see ``SweepResult.seeds``).
+    measurement noise; each point gets its own seed (see ``SweepResult.seeds``). ``start`` and
+    ``settle_periods`` as in :func:`run_experiment`.
     """
+    require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
     factory: Factory | None = None
     if callable(rig) and not isinstance(rig, Rig):
         require(excitation is None, "excitation", excitation, "given once: sweep(factory, excitation, **axes)")
@@ -425,6 +427,7 @@ def sweep(
                 settle_periods,
                 window,
                 core_threads,
+                start,
             )  # fmt: skip
             for rows in chunks
         ]

@@ -31,9 +31,10 @@ struct SweepEstimates {
     Eigen::Index periods = 0, blocks = 0;
 };
 
-// Runs every point. All points share the sample rate fs (Hz) and the known mass of eq. 9 (kg).
+// Runs every point, from rest or (steady_start) from the periodic steady state. All points share the sample rate fs (Hz) and the known mass of eq. 9 (kg).
 // workers <= 0 means one thread per hardware core.
 SweepEstimates run_sweep(const Eigen::Ref<const Eigen::VectorXd>& period_force, const std::vector<SweepPoint>& points,
-                         Eigen::Index periods, LinePlan plan, int median_window, int workers);
+                         Eigen::Index periods, LinePlan plan, int median_window, int workers,
+                         bool steady_start = false);
 
 }  // namespace amb_fast

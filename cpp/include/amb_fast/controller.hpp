@@ -112,6 +112,14 @@ public:
     int capacity() const { return capacity_; }
     const Controller& controller() const { return controller_; }
     double* state() { return state_.data(); }
+    const double* state() const { return state_.data(); }
+
+    // The delay line, oldest command first (the next one applied), and setting it and the state.
+    double line(int j) const { return delay_line_[(head_ + static_cast<std::size_t>(j)) % delay_line_.size()]; }
+    void set_line(int j, double u) {
+        head_ = 0;
+        delay_line_[static_cast<std::size_t>(j)] = u;
+    }
 
     // Puts u[k] (A) into the delay line and returns u[k - delay].
     double delayed(double u) {

@@ -19,10 +19,11 @@ inline Eigen::Index periods_per_block(Eigen::Index periods) {
 }
 
 // Repeats one period of excitation force (N, plan.period samples) for settle_periods, then records
-// `periods` more into the estimator.
+// `periods` more into the estimator. From rest, or with steady_start from the periodic steady state
+// (Loop::start_periodic).
 LineEstimate run_experiment(const Rig& rig, const Controller& controller, const Eigen::Ref<const Eigen::VectorXd>& period_force,
                             Eigen::Index settle_periods, Eigen::Index periods, LinePlan plan, std::uint64_t seed,
-                            int median_window);
+                            int median_window, bool steady_start = false);
 
 // The estimator over a recording of n samples per channel (a whole number of periods after settling).
 LineEstimate identify(const double* force, const double* displacement, Eigen::Index n, Eigen::Index settle_periods,

@@ -33,6 +33,10 @@ public:
         }
     }
 
+    double pole() const { return a_; }
+    double state() const { return q_; }
+    void set_state(double q) { q_ = coupled_ ? q : 0.0; }
+
 private:
     bool coupled_;
     double a_, q_ = 0.0;
@@ -54,6 +58,15 @@ public:
     // Advances n samples of zero-order-held force (N) and records them. Throws Touchdown when the
     // platform reaches its clearance, std::overflow_error if the state stops being finite.
     void run(const double* force, Eigen::Index n, Channels out);
+
+    // Starts in the periodic steady state of the L-sample period_force repeated forever (steady.hpp):
+    // exact for the linear law without noise; with sensor noise, the noise-driven part of the state is
+    // drawn from its stationary distribution. The non-linear law starts from the linearised steady state.
+    void start_periodic(const double* period_force, Eigen::Index L);
+    // The state as z of steady.hpp, and setting it (the delay line restarts at its head).
+    Eigen::VectorXd stacked_state() const;
+    void set_stacked_state(const Eigen::VectorXd& z);
+    ForceTransducer& transducer() { return transducer_; }
 
     // Samples at which the amplifier clipped the current command, since the start.
     Eigen::Index saturated_samples() const { return saturated_; }
@@ -86,6 +99,7 @@ private:
     double touchdown_;  // |y| of touchdown (m), may be infinite
     Eigen::Index saturated_ = 0;
     // One stream per noise source, so the draws do not depend on how a run is cut into chunks.
+    std::uint64_t seed_;
     NormalStream sensor_rng_, force_rng_;
     Eigen::VectorXd sensor_noise_ = Eigen::VectorXd::Zero(chunk), force_noise_ = Eigen::VectorXd::Zero(chunk);
     ForceTransducer transducer_;

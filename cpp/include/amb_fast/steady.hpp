@@ -1,0 +1,38 @@
+// The exact periodic steady state of the linear loop, and the stationary distribution of its noise:
+// a run can start where an infinitely long settling would have left it, however slow its poles.
+#pragma once
+
+#include <Eigen/Dense>
+
+#include "amb_fast/controller.hpp"
+#include "amb_fast/plant.hpp"
+
+namespace amb_fast {
+
+// The loop's state stacked as z = [x (the plant's 5 states), s (the controller's n), line (the delay
+// line, oldest command first)]. Without noise or limits, z[k+1] = M z[k] + (force term); white sensor
+// noise n[k] adds noise_in * n[k] (it enters through the measurement e).
+struct ClosedLoopMap {
+    ClosedLoopMap(const Rig& rig, const Controller& controller);
+    Eigen::MatrixXd M;
+    Eigen::VectorXd noise_in;
+};
+
+// The z0 with z0 = M^N z0 + zN, where zN is the state one period of N samples after rest: the state at
+// the start of a period in periodic steady state. M^N by repeated squaring.
+Eigen::VectorXd periodic_start(const Eigen::MatrixXd& M, Eigen::Index N, const Eigen::VectorXd& zN);
+
+// A square root S (P = S S^T) of the stationary covariance P = M P M^T + sigma^2 g g^T of z driven by
+// white noise of rms sigma through g, by the doubling algorithm; draws z = S w, w ~ N(0, I).
+Eigen::MatrixXd stationary_noise_root(const Eigen::MatrixXd& M, const Eigen::VectorXd& g, double sigma);
+
+// The force transducer's AC-coupling state q at a period's start in steady state, from q after one
+// period from rest (q[k+1] = a q[k] + (1 - a) f[k], so q0 = qN / (1 - a^N)).
+inline double periodic_transducer_start(double a, Eigen::Index N, double qN) {
+    return qN / (1.0 - std::pow(a, static_cast<double>(N)));
+}
+
+// Seed of the stream that draws the stationary noise state (neither the sensor's nor the force's).
+inline std::uint64_t start_noise_seed(std::uint64_t seed) { return seed ^ 0x5851f42d4c957f2dULL; }
+
+}  // namespace amb_fast

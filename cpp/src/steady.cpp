@@ -1,0 +1,66 @@
+#include "amb_fast/steady.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <stdexcept>
+
+namespace amb_fast {
+
+ClosedLoopMap::ClosedLoopMap(const Rig& rig, const Controller& c) {
+    const Propagator P = propagator(rig, c.period());
+    const int np = state::size, n = c.order(), d = c.delay, size = np + n + d;
+    const int sensed = rig.sensor_bandwidth ? state::ys : state::y;
+    M = Eigen::MatrixXd::Zero(size, size);
+    noise_in = Eigen::VectorXd::Zero(size);
+    // e = x[sensed] (+ noise); u = C s + D e; the applied command is line[0] (or u without a delay).
+    Eigen::RowVectorXd u_row = Eigen::RowVectorXd::Zero(size);
+    u_row[sensed] = c.D;
+    u_row.segment(np, n) = c.C.transpose();
+    Eigen::RowVectorXd applied = u_row;
+    double applied_noise = c.D;
+    if (d > 0) {
+        applied.setZero();
+        applied[np + n] = 1.0;
+        applied_noise = 0.0;
+    }
+    const Eigen::Matrix<double, state::size, state::size> Phi = P.topLeftCorner<state::size, state::size>();
+    const Eigen::Matrix<double, state::size, 1> Gu = P.block<state::size, 1>(0, augmented::i_cmd);
+    M.topLeftCorner(np, np) = Phi;
+    M.topRows(np) += Gu * applied;
+    noise_in.head(np) = Gu * applied_noise;
+    M.block(np, np, n, n) = c.A;
+    M.block(np, sensed, n, 1) += c.B;
+    noise_in.segment(np, n) = c.B;
+    for (int j = 0; j + 1 < d; ++j) M(np + n + j, np + n + j + 1) = 1.0;
+    if (d > 0) {
+        M.row(np + n + d - 1) = u_row;
+        noise_in[np + n + d - 1] = c.D;
+    }
+}
+
+Eigen::VectorXd periodic_start(const Eigen::MatrixXd& M, Eigen::Index N, const Eigen::VectorXd& zN) {
+    Eigen::MatrixXd power = Eigen::MatrixXd::Identity(M.rows(), M.cols()), square = M;
+    for (Eigen::Index k = N; k > 0; k >>= 1) {
+        if (k & 1) power = power * square;
+        square = square * square;
+    }
+    const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(M.rows(), M.cols());
+    return (I - power).partialPivLu().solve(zN);
+}
+
+Eigen::MatrixXd stationary_noise_root(const Eigen::MatrixXd& M, const Eigen::VectorXd& g, double sigma) {
+    // P = sum_k M^k Q M^kT; doubling: P <- P + A P A^T, A <- A A, converging quadratically in samples.
+    Eigen::MatrixXd P = sigma * sigma * g * g.transpose(), A = M;
+    for (int it = 0; it < 80; ++it) {
+        const Eigen::MatrixXd next = P + A * P * A.transpose();
+        A = A * A;
+        const bool done = (next - P).cwiseAbs().maxCoeff() <= 1e-16 * next.cwiseAbs().maxCoeff();
+        P = next;
+        if (done && A.cwiseAbs().maxCoeff() < 1e-12) break;
+    }
+    P = 0.5 * (P + P.transpose());
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(P);
+    const Eigen::VectorXd roots = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+    return eig.eigenvectors() * roots.asDiagonal();
+}
+
+}  // namespace amb_fast
