@@ -7,6 +7,13 @@ namespace {
 using InputArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
 }
 
+void bind_cancel(py::module_& m) {
+    py::class_<CancelToken>(m, "CancelToken", "Stops the core calls it is given (cancel()) between blocks.")
+        .def(py::init<>())
+        .def("cancel", [](CancelToken& t) { t.cancelled = true; }, "Ask the calls holding this token to stop.")
+        .def_property_readonly("cancelled", [](const CancelToken& t) { return t.cancelled.load(); });
+}
+
 void bind_loop(py::module_& m) {
     m.def(
         "simulate",
@@ -15,14 +22,15 @@ void bind_loop(py::module_& m) {
             const auto n = static_cast<Eigen::Index>(force.size());
             // Outputs are numpy's own arrays (numpy asks the kernel for huge pages on large ones).
             py::array_t<double> recorded(n), displacement(n), current(n);
-            {
-                py::gil_scoped_release release;
-                simulate(rig, controller, force.data(), n,
-                         {recorded.mutable_data(), displacement.mutable_data(), current.mutable_data()}, seed);
-            }
+            double* channels[3] = {recorded.mutable_data(), displacement.mutable_data(), current.mutable_data()};
+            const double* input = force.data();
+            interruptible([&] {
+                simulate(rig, controller, input, n, {channels[0], channels[1], channels[2]}, seed);
+                return 0;
+            });
             return py::make_tuple(recorded, displacement, current);
         },
         py::arg("rig"), py::arg("controller"), py::arg("force"), py::arg("seed") = 0,
         "Runs the closed loop from rest on a force sequence (N) at fs; returns the recorded force (N), sensor "
-        "displacement (m) and coil current (A). Releases the GIL while it runs.");
+        "displacement (m) and coil current (A). Releases the GIL while it runs; Ctrl-C stops it.");
 }

@@ -33,9 +33,18 @@ void bind_spectrum(py::module_& m) {
         .def_readonly("blocks", &LineEstimate::blocks)
         .def_readonly("saturated_samples", &LineEstimate::saturated_samples);
 
-    m.def("run_experiment", &run_experiment, py::arg("rig"), py::arg("controller"), py::arg("period_force"),
-          py::arg("settle_periods"), py::arg("periods"), py::arg("plan"), py::arg("seed"), py::arg("median_window"),
-          py::arg("steady_start") = false, py::call_guard<py::gil_scoped_release>(),
+    m.def(
+        "run_experiment",
+        [](const Rig& rig, const Controller& controller, const Eigen::Ref<const Eigen::VectorXd>& period_force,
+           Eigen::Index settle_periods, Eigen::Index periods, const LinePlan& plan, std::uint64_t seed,
+           int median_window, bool steady_start) {
+            return interruptible([&] {
+                return run_experiment(rig, controller, period_force, settle_periods, periods, plan, seed,
+                                      median_window, steady_start);
+            });
+        },
+        py::arg("rig"), py::arg("controller"), py::arg("period_force"), py::arg("settle_periods"), py::arg("periods"),
+        py::arg("plan"), py::arg("seed"), py::arg("median_window"), py::arg("steady_start") = false,
           "Simulates settle + periods of the repeated excitation and estimates, keeping no time series.");
 
     m.def(
@@ -44,9 +53,10 @@ void bind_spectrum(py::module_& m) {
            double mass, double fs, int median_window) {
             if (force.ndim() != 1 || displacement.ndim() != 1 || force.size() != displacement.size())
                 throw std::invalid_argument("force and displacement must be one-dimensional and of equal length");
-            py::gil_scoped_release release;
-            return identify(force.data(), displacement.data(), static_cast<Eigen::Index>(force.size()),
-                            settle_periods, plan, mass, fs, median_window);
+            return interruptible([&] {
+                return identify(force.data(), displacement.data(), static_cast<Eigen::Index>(force.size()),
+                                settle_periods, plan, mass, fs, median_window);
+            });
         },
         py::arg("force"), py::arg("displacement"), py::arg("settle_periods"), py::arg("plan"), py::arg("mass"),
         py::arg("fs"), py::arg("median_window"), "The estimator over recorded arrays (whole periods).");

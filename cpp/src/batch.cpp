@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "amb_fast/errors.hpp"
+#include "amb_fast/interrupt.hpp"
 #include "amb_fast/steady.hpp"
 
 namespace amb_fast {
@@ -201,6 +202,7 @@ void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* poi
     if (steady_start) start_lanes_periodic<N, sensed>(lane, points, period_force, map, transducer);
 
     for (Eigen::Index p = 0; p < last; ++p) {
+        poll_interrupt();
         if (rig.sensor_noise > 0.0)
             for (std::size_t g = 0; g < n; ++g) {
                 sensor_noise[g].fill(draws.data(), L, rig.sensor_noise);
@@ -324,19 +326,22 @@ SweepEstimates run_sweep(const Eigen::Ref<const Eigen::VectorXd>& period_force, 
     const Eigen::VectorXd force = period_force;
     if (workers <= 0) workers = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     workers = static_cast<int>(std::min<Eigen::Index>(workers, std::max<Eigen::Index>(n, 1)));
-    // Contiguous shares, so each point's numbers do not depend on how many workers there are.
+    // Contiguous shares, so each point's numbers do not depend on how many workers there are. The
+    // calling thread computes the first share itself (it is the one that can see Ctrl-C).
+    const InterruptCheck* check = interrupt_check();
     std::vector<std::thread> threads;
     std::vector<std::exception_ptr> errors(static_cast<std::size_t>(workers));
-    for (int w = 0; w < workers; ++w) {
+    auto share = [&](int w) {
         const Eigen::Index begin = n * w / workers, end = n * (w + 1) / workers;
-        threads.emplace_back([&, w, begin, end] {
-            try {
-                run_points(force, points.data() + begin, end - begin, periods, plan, median_window, steady_start, out, begin);
-            } catch (...) {
-                errors[static_cast<std::size_t>(w)] = std::current_exception();
-            }
-        });
-    }
+        const ScopedInterruptCheck installed(check);
+        try {
+            run_points(force, points.data() + begin, end - begin, periods, plan, median_window, steady_start, out, begin);
+        } catch (...) {
+            errors[static_cast<std::size_t>(w)] = std::current_exception();
+        }
+    };
+    for (int w = 1; w < workers; ++w) threads.emplace_back(share, w);
+    share(0);
     for (auto& t : threads) t.join();
     for (auto& e : errors)
         if (e) std::rethrow_exception(e);

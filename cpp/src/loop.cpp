@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "amb_fast/errors.hpp"
+#include "amb_fast/interrupt.hpp"
 #include "amb_fast/steady.hpp"
 
 namespace amb_fast {
@@ -35,6 +36,7 @@ Loop::Loop(const Rig& rig, const Controller& controller, std::uint64_t seed)
 
 void Loop::run(const double* force, Eigen::Index n, Channels out) {
     for (Eigen::Index start = 0; start < n; start += chunk) {
+        poll_interrupt();
         const Eigen::Index m = std::min(chunk, n - start);
         const Channels part{out.force + start, out.displacement + start, out.current + start};
         if (rig_.sensor_noise > 0.0) sensor_rng_.fill(sensor_noise_.data(), m, rig_.sensor_noise);

@@ -277,7 +277,7 @@ def point_model(
 def _run_chunk(
     rig: Rig | None, controller: AnyController | None, factory: Factory | None, excitation: Multisine,
     values: dict[str, np.ndarray], seeds: np.ndarray, periods: int, settle_periods: int | None, window: int,
-    workers: int, start: str = "steady",
+    workers: int, start: str = "steady", cancel: _core.CancelToken | None = None,
 ) -> dict[str, np.ndarray]:  # fmt: skip
     """One unit of work, for a thread or any executor (picklable arguments, numpy results): each
     point's rig and controller, the stability check (an unstable point is flagged, never simulated),
@@ -316,7 +316,7 @@ def _run_chunk(
         require(len(masses) == 1, "mass", sorted(masses), "the same at every point of a sweep (kg)")
         core = _core.run_sweep(excitation.samples, [models[j][0]._to_core() for j in rows],
                                [core_controller(models[j][1]) for j in rows], out["settle_periods"][rows],
-                               seeds[rows], periods, plan, window, workers, start == "steady")  # fmt: skip
+                               seeds[rows], periods, plan, window, workers, start == "steady", cancel)  # fmt: skip
         for name in _CORE_FIELDS:
             out[name][rows] = np.asarray(getattr(core, name))
     return out
@@ -369,7 +369,8 @@ def sweep(
     rig and controller shape advance in lock step), ``workers`` threads per call (default: all
     cores), with the GIL released. Every point equals :func:`run_experiment` of that point bit for bit.
 
-    The grid is cut into chunks of ``chunk_size`` points (default: about eight per worker), each run
+    The grid is cut into chunks of ``chunk_size`` points (default: equal chunks, a multiple of the
+    number of workers, up to eight per worker and of at least 32 points where there are enough), each run
     by the batched core: on ``workers`` threads here, or on ``executor``, any
     :class:`concurrent.futures.Executor` (threads, processes, or a dask cluster's
     ``client.get_executor()``; each chunk then uses ``workers`` core threads, default one). Results
@@ -404,7 +405,12 @@ def sweep(
     require(executor is None or callable(getattr(executor, "submit", None)), "executor", executor,
             "a concurrent.futures.Executor (with submit)")  # fmt: skip
     require(progress in (None, True, False), "progress", progress, "True, False or None")
-    size = integer("chunk_size", chunk_size, 1) if chunk_size is not None else max(32, -(-n // (8 * threads)))
+    if chunk_size is not None:
+        size = integer("chunk_size", chunk_size, 1)
+    else:  # equal work per thread: a multiple of `threads` chunks, up to eight each, of at least 32 points
+        count = min(8 * threads, max(1, -(-n // 32)))
+        count = -(-count // threads) * threads
+        size = -(-n // count)
     chunks = [np.arange(i, min(i + size, n)) for i in range(0, n, size)]
     # Threads here (the core releases the GIL), or the executor's workers with `workers` core
     # threads per chunk (default one).
@@ -413,6 +419,9 @@ def sweep(
     _, unexcited = _plan(excitation.harmonics, excitation.period_samples)
     results: dict[str, np.ndarray] = {}
     bar = _progress_bar(progress, n)
+    # Chunks on our own threads stop between periods when the sweep is interrupted (Ctrl-C reaches
+    # this thread while it waits); an executor's workers finish their chunks.
+    cancel = _core.CancelToken() if executor is None else None
     try:
         futures = [
             run_on.submit(
@@ -428,6 +437,7 @@ def sweep(
                 window,
                 core_threads,
                 start,
+                cancel,
             )  # fmt: skip
             for rows in chunks
         ]
@@ -438,6 +448,10 @@ def sweep(
                 results[name][rows] = values
             if bar is not None:
                 bar.update(rows.size)
+    except BaseException:
+        if cancel is not None:
+            cancel.cancel()
+        raise
     finally:
         if executor is None:
             run_on.shutdown(cancel_futures=True)
