@@ -14,10 +14,11 @@ void bind_params(py::module_& m) {
                          std::optional<double> amp_bandwidth, std::optional<double> eddy_bandwidth,
                          std::optional<double> sensor_bandwidth, int substeps, double sensor_noise, double force_noise,
                          double mass_loading, std::optional<double> force_coupling_tau,
-                         std::optional<double> clearance, std::optional<double> current_limit) {
+                         std::optional<double> clearance, std::optional<double> current_limit, double dead_time) {
                  Rig rig{mass,          kyy,         kiy,          bias_current,      force_law,
                          amp_bandwidth, eddy_bandwidth, sensor_bandwidth, substeps, sensor_noise,
-                         force_noise,   mass_loading, force_coupling_tau, clearance, current_limit};
+                         force_noise,   mass_loading, force_coupling_tau, clearance, current_limit,
+                         dead_time};
                  rig.validate();
                  return rig;
              }),
@@ -25,7 +26,8 @@ void bind_params(py::module_& m) {
              py::arg("force_law"), py::arg("amp_bandwidth"), py::arg("eddy_bandwidth"), py::arg("sensor_bandwidth"),
              py::arg("substeps"), py::arg("sensor_noise") = 0.0, py::arg("force_noise") = 0.0,
              py::arg("mass_loading") = 0.0, py::arg("force_coupling_tau") = std::nullopt,
-             py::arg("clearance") = std::nullopt, py::arg("current_limit") = std::nullopt)
+             py::arg("clearance") = std::nullopt, py::arg("current_limit") = std::nullopt,
+             py::arg("dead_time") = 0.0)
         .def("magnet_force", &Rig::magnet_force, py::arg("y"), py::arg("i"),
              "Non-linear magnet-pair force on the platform (N) at displacement y (m) and current i (A).")
         .def_property_readonly("gap", &Rig::gap, "Nominal air gap of the force law (m).");

@@ -46,11 +46,11 @@ bool same_group(const SweepPoint& a, const SweepPoint& b) {
 struct Lanes {
     Lanes(Eigen::Index lanes, int N, int delay)
         : n(static_cast<std::size_t>(lanes)),
-          y(n), v(n), i(n), f(n), s(n), e(n), u(n), cs(n), acc(n), saturated(n), peak(n),
+          y(n), v(n), i(n), f(n), s(n), e(n), u(n), cs(n), acc(n), saturated(n), peak(n), uprev(n),
           state(n * static_cast<std::size_t>(N)), next(state.size()), A(n * static_cast<std::size_t>(N * N)),
           B(state.size()), C(state.size()), D(n), held(n * static_cast<std::size_t>(std::max(delay, 1))) {}
     std::size_t n;
-    std::vector<double> y, v, i, f, s, e, u, cs, acc, saturated, peak;  // plant state, e, u, scratch
+    std::vector<double> y, v, i, f, s, e, u, cs, acc, saturated, peak, uprev;  // plant state, e, u, scratch
     std::vector<double> state, next, A, B, C, D, held;                // controller state, coefficients, delay line
 };
 
@@ -98,6 +98,7 @@ void step_lanes(Lanes& L, std::size_t head, const double* __restrict noise, doub
     double* __restrict ys = L.s.data();
     double* __restrict saturated = L.saturated.data();
     double* __restrict peak = L.peak.data();
+    double* __restrict uprev = L.uprev.data();
     for (std::size_t g = 0; g < n; ++g) {
         if constexpr (checked) {  // the amplifier's limit, as in Loop::run_linear
             const double wanted = u[g];
@@ -105,9 +106,17 @@ void step_lanes(Lanes& L, std::size_t head, const double* __restrict noise, doub
             saturated[g] += u[g] != wanted;
         }
         out_y[g] = e[g];
-        map.advance(y[g], v[g], i[g], f[g], ys[g], force, u[g]);
-        if constexpr (checked) peak[g] = std::max(peak[g], std::abs(y[g]));
     }
+    if (map.fractional) {
+        for (std::size_t g = 0; g < n; ++g) {
+            map.advance(y[g], v[g], i[g], f[g], ys[g], force, u[g], uprev[g]);
+            uprev[g] = u[g];
+        }
+    } else {
+        for (std::size_t g = 0; g < n; ++g) map.advance(y[g], v[g], i[g], f[g], ys[g], force, u[g]);
+    }
+    if constexpr (checked)
+        for (std::size_t g = 0; g < n; ++g) peak[g] = std::max(peak[g], std::abs(y[g]));
 }
 
 // Every lane in the periodic steady state, exactly as Loop::start_periodic puts a single run there: one
@@ -117,7 +126,8 @@ template <int N, int sensed>
 void start_lanes_periodic(Lanes& lane, const SweepPoint* points, const Eigen::VectorXd& period_force,
                           const CascadeMap& map, ForceTransducer& transducer) {
     const Rig& rig = points[0].rig;
-    const int d = points[0].controller.delay;
+    const DeadTime dead = split_dead_time(rig.dead_time, points[0].controller.period());
+    const int d = points[0].controller.delay + dead.samples;
     const std::size_t n = lane.n;
     const Eigen::Index L = period_force.size();
     Lanes probe(static_cast<Eigen::Index>(n), N, d);
@@ -140,14 +150,16 @@ void start_lanes_periodic(Lanes& lane, const SweepPoint* points, const Eigen::Ve
     settled.record(period_force.data(), L, recorded.data());
     transducer.set_state(periodic_transducer_start(transducer.pole(), L, settled.state()));
     for (std::size_t g = 0; g < n; ++g) {
-        const Controller& c = points[g].controller;
-        const int order = c.order();
-        Eigen::VectorXd z(state::size + order + d);
+        Controller c = points[g].controller;
+        c.delay = d;
+        const int order = c.order(), prev = int(dead.fraction > 0.0);
+        Eigen::VectorXd z(state::size + order + d + prev);
         z.head<state::size>() << probe.y[g], probe.v[g], probe.i[g], probe.f[g], probe.s[g];
+        if (prev) z[z.size() - 1] = probe.uprev[g];
         for (int j = 0; j < order; ++j) z[state::size + j] = probe.state[static_cast<std::size_t>(j) * n + g];
         for (int j = 0; j < d; ++j)
             z[state::size + order + j] = probe.held[((head + static_cast<std::size_t>(j)) % static_cast<std::size_t>(d)) * n + g];
-        const ClosedLoopMap loop(linear, c);
+        const ClosedLoopMap loop(linear, c, dead.fraction);
         z = periodic_start(loop.M, L, z);
         if (rig.sensor_noise > 0.0) {
             NormalStream draws(start_noise_seed(points[g].seed));
@@ -158,6 +170,7 @@ void start_lanes_periodic(Lanes& lane, const SweepPoint* points, const Eigen::Ve
         lane.y[g] = z[0], lane.v[g] = z[1], lane.i[g] = z[2], lane.f[g] = z[3], lane.s[g] = z[4];
         for (int j = 0; j < order; ++j) lane.state[static_cast<std::size_t>(j) * n + g] = z[state::size + j];
         for (int j = 0; j < d; ++j) lane.held[static_cast<std::size_t>(j) * n + g] = z[state::size + order + j];
+        if (prev) lane.uprev[g] = z[z.size() - 1];
     }
 }
 
@@ -169,8 +182,8 @@ void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* poi
     const Rig& rig = points[0].rig;
     const Controller& first = points[0].controller;
     const Eigen::Index L = period_force.size();
-    const CascadeMap map(propagator(rig, first.period()));
-    const int d = first.delay;
+    const CascadeMap map(sample_map(rig, first.period()));
+    const int d = first.delay + split_dead_time(rig.dead_time, first.period()).samples;
     Lanes lane(lanes, N, d);
     const std::size_t n = lane.n;
     std::vector<PeriodEstimator> estimators;

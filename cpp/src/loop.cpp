@@ -1,6 +1,7 @@
 #include "amb_fast/loop.hpp"
 
 #include <algorithm>
+#include <type_traits>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -11,9 +12,18 @@
 
 namespace amb_fast {
 
+namespace {
+// The controller as the loop runs it: its own delay plus the rig's dead time in whole samples.
+Controller with_dead_samples(const Controller& controller, const Rig& rig) {
+    Controller c = validated(controller);
+    c.delay += split_dead_time(validated(rig).dead_time, c.period()).samples;
+    return c;
+}
+}  // namespace
+
 Loop::Loop(const Rig& rig, const Controller& controller, std::uint64_t seed)
     : rig_(validated(rig)),
-      controller_(controller),
+      controller_(with_dead_samples(controller, rig)),
       T_(controller.period()),
       sensed_(rig.sensor_bandwidth ? state::ys : state::y),
       has_amp_(rig.amp_bandwidth.has_value()),
@@ -25,12 +35,16 @@ Loop::Loop(const Rig& rig, const Controller& controller, std::uint64_t seed)
       sensor_rng_(seed),
       force_rng_(seed ^ 0x9e3779b97f4a7c15ULL),
       transducer_(rig, controller.period()) {
+    fraction_ = split_dead_time(rig_.dead_time, T_).fraction;
     if (rig_.force_law == ForceLaw::linear) {
-        map_.emplace(propagator(rig_, T_));
+        map_.emplace(sample_map(rig_, T_));
     } else {
-        const double h = T_ / rig_.substeps;
-        P_ = propagator(rig_, h);
-        P_half_ = propagator(rig_, h / 2);
+        auto stretch = [&](double length) {
+            const double h = length / rig_.substeps;
+            return Stretch{h, propagator(rig_, h), propagator(rig_, h / 2)};
+        };
+        if (fraction_ > 0.0) early_ = stretch(fraction_);
+        late_ = stretch(T_ - fraction_);
     }
 }
 
@@ -65,26 +79,37 @@ template <int N>
 void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise) {
     const bool checked = std::isfinite(limit_) || std::isfinite(touchdown_);
     const bool ys = sensed_ == state::ys;
+    auto run = [&](auto sensed, auto has_amp, auto check) {
+        if (map_->fractional)
+            run_linear<N, decltype(sensed)::value, decltype(has_amp)::value, decltype(check)::value, true>(force, n, out, noise);
+        else
+            run_linear<N, decltype(sensed)::value, decltype(has_amp)::value, decltype(check)::value, false>(force, n, out, noise);
+    };
+    using Y = std::integral_constant<int, state::y>;
+    using YS = std::integral_constant<int, state::ys>;
+    using T = std::true_type;
+    using F = std::false_type;
     if (checked) {
         if (ys)
-            has_amp_ ? run_linear<N, state::ys, true, true>(force, n, out, noise) : run_linear<N, state::ys, false, true>(force, n, out, noise);
+            has_amp_ ? run(YS{}, T{}, T{}) : run(YS{}, F{}, T{});
         else
-            has_amp_ ? run_linear<N, state::y, true, true>(force, n, out, noise) : run_linear<N, state::y, false, true>(force, n, out, noise);
+            has_amp_ ? run(Y{}, T{}, T{}) : run(Y{}, F{}, T{});
     } else {
         if (ys)
-            has_amp_ ? run_linear<N, state::ys, true, false>(force, n, out, noise) : run_linear<N, state::ys, false, false>(force, n, out, noise);
+            has_amp_ ? run(YS{}, T{}, F{}) : run(YS{}, F{}, F{});
         else
-            has_amp_ ? run_linear<N, state::y, true, false>(force, n, out, noise) : run_linear<N, state::y, false, false>(force, n, out, noise);
+            has_amp_ ? run(Y{}, T{}, F{}) : run(Y{}, F{}, F{});
     }
 }
 
-template <int N, int sensed, bool has_amp, bool checked>
+template <int N, int sensed, bool has_amp, bool checked, bool fractional>
 void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise) {
     using namespace state;
     const CascadeMap& map = *map_;
     const ControlLaw<N>& law = controller_.law<N>();
     double* s = controller_.state();
     double xy = x_[y], xv = x_[v], xi = x_[i], xf = x_[i_f], xs = x_[ys];
+    double u_prev = u_prev_;
     const double limit = limit_, touchdown = touchdown_;
     const bool has_clearance = std::isfinite(touchdown);  // else a diverging y (Inf) is no touchdown
     Eigen::Index saturated = 0;
@@ -96,12 +121,18 @@ void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const d
         if constexpr (checked) saturated += u != wanted;
         out.displacement[j] = e;
         out.current[j] = has_amp ? xi : u;
-        map.advance(xy, xv, xi, xf, xs, force[j], u);
+        if constexpr (fractional) {
+            map.advance(xy, xv, xi, xf, xs, force[j], u, u_prev);
+            u_prev = u;
+        } else {
+            map.advance(xy, xv, xi, xf, xs, force[j], u);
+        }
         if constexpr (checked)
             if (has_clearance && std::abs(xy) >= touchdown)
                 throw Touchdown((k_ + j + 1) * T_, xy, static_cast<long>(k_ + j + 1));
     }
     saturated_ += saturated;
+    u_prev_ = u_prev;
     x_ << xy, xv, xi, xf, xs;
     // Inf and NaN never turn finite again in a linear recursion, so one check per chunk suffices.
     if (!x_.allFinite()) {
@@ -120,8 +151,15 @@ void Loop::run_nonlinear(const double* force, Eigen::Index n, Channels out, cons
         out.displacement[j] = e;
         out.current[j] = has_amp_ ? x_[state::i] : i_cmd;
         AugmentedVector X;
-        X << x_, force[j], i_cmd;
-        advance_nonlinear(X);
+        if (fraction_ > 0.0) {  // the dead time's fraction with the previous command, then this one
+            X << x_, force[j], u_prev_;
+            advance_nonlinear(X, early_);
+            X[augmented::i_cmd] = i_cmd;
+        } else {
+            X << x_, force[j], i_cmd;
+        }
+        advance_nonlinear(X, late_);
+        u_prev_ = i_cmd;
         x_ = X.head<state::size>();
         if (std::abs(x_[state::y]) >= touchdown_)
             throw Touchdown((k_ + j + 1) * T_, x_[state::y], static_cast<long>(k_ + j + 1));
@@ -134,14 +172,14 @@ void Loop::run_nonlinear(const double* force, Eigen::Index n, Channels out, cons
 // acts on v alone. Exact when the remainder vanishes, fourth order otherwise, and free of the
 // step-size limit that the fast lags would put on plain RK4. Stages need only y and the driving
 // current, so they take two rows of the half-step map, not all of it.
-void Loop::advance_nonlinear(AugmentedVector& X) const {
+void Loop::advance_nonlinear(AugmentedVector& X, const Stretch& stretch) const {
     using state::v;
     using state::y;
-    const double h = T_ / rig_.substeps;
+    const double h = stretch.h;
     const double inv_m = 1.0 / rig_.moving_mass();
     const int d = drive_;
-    const auto& E = P_;
-    const auto& E2 = P_half_;
+    const auto& E = stretch.full;
+    const auto& E2 = stretch.half;
     for (int s = 0; s < rig_.substeps; ++s) {
         const double half_y = E2.row(y).dot(X), half_d = E2.row(d).dot(X);
         const AugmentedVector full = E * X;
@@ -157,8 +195,10 @@ void Loop::advance_nonlinear(AugmentedVector& X) const {
 Eigen::VectorXd Loop::stacked_state() const {
     const Controller& c = controller_.controller();
     const int n = c.order(), d = c.delay;
-    Eigen::VectorXd z(state::size + n + d);
+    const bool fractional = fraction_ > 0.0;
+    Eigen::VectorXd z(state::size + n + d + int(fractional));
     z.head<state::size>() = x_;
+    if (fractional) z[z.size() - 1] = u_prev_;
     for (int j = 0; j < n; ++j) z[state::size + j] = controller_.state()[j];
     for (int j = 0; j < d; ++j) z[state::size + n + j] = controller_.line(j);
     return z;
@@ -168,6 +208,7 @@ void Loop::set_stacked_state(const Eigen::VectorXd& z) {
     const Controller& c = controller_.controller();
     const int n = c.order(), d = c.delay;
     x_ = z.head<state::size>();
+    if (fraction_ > 0.0) u_prev_ = z[z.size() - 1];
     for (int j = 0; j < n; ++j) controller_.state()[j] = z[state::size + j];
     for (int j = 0; j < d; ++j) controller_.set_line(j, z[state::size + n + j]);
 }
@@ -179,10 +220,12 @@ void Loop::start_periodic(const double* period_force, Eigen::Index L) {
     quiet.sensor_noise = quiet.force_noise = 0.0;
     quiet.clearance.reset();
     quiet.current_limit.reset();
-    Loop probe(quiet, controller_.controller());
+    Controller own = controller_.controller();  // the dead time's whole samples are in its delay already
+    own.delay -= split_dead_time(rig_.dead_time, T_).samples;
+    Loop probe(quiet, own);
     Eigen::VectorXd f(L), y(L), i(L);
     probe.run(period_force, L, {f.data(), y.data(), i.data()});
-    const ClosedLoopMap map(quiet, controller_.controller());
+    const ClosedLoopMap map(quiet, controller_.controller(), fraction_);
     Eigen::VectorXd z = periodic_start(map.M, L, probe.stacked_state());
     if (rig_.sensor_noise > 0.0) {
         NormalStream draws(start_noise_seed(seed_));

@@ -33,6 +33,7 @@ void Rig::validate() const {
         if (force_law == ForceLaw::nonlinear)
             require(*clearance < gap(), "clearance", *clearance, "below the air gap i0 Kiy / (-Kyy) (m)");
     }
+    require(std::isfinite(dead_time) && dead_time >= 0.0, "dead_time", dead_time, "finite and >= 0 (s)");
     if (force_law == ForceLaw::nonlinear)
         require(kyy < 0.0, "kyy", kyy, "< 0 for the non-linear force law of a biased magnet pair (N/m)");
 }
@@ -97,8 +98,31 @@ Propagator propagator(const Rig& rig, double h) {
     return M.exp();
 }
 
-CascadeMap::CascadeMap(const Propagator& P) {
+DeadTime split_dead_time(double dead_time, double T) {
+    const int samples = static_cast<int>(std::floor(dead_time / T));
+    return {samples, std::max(0.0, dead_time - samples * T)};
+}
+
+SampleMap sample_map(const Rig& rig, double T) {
+    const double fraction = split_dead_time(rig.dead_time, T).fraction;
+    const Propagator whole = propagator(rig, T);
+    SampleMap map;
+    map.Phi = whole.topLeftCorner<state::size, state::size>();
+    map.Gf = whole.block<state::size, 1>(0, augmented::f);
+    if (fraction == 0.0) {
+        map.G0 = whole.block<state::size, 1>(0, augmented::i_cmd);
+        map.G1.setZero();
+        return map;
+    }
+    const Propagator late = propagator(rig, T - fraction), early = propagator(rig, fraction);
+    map.G0 = late.block<state::size, 1>(0, augmented::i_cmd);
+    map.G1 = late.topLeftCorner<state::size, state::size>() * early.block<state::size, 1>(0, augmented::i_cmd);
+    return map;
+}
+
+CascadeMap::CascadeMap(const SampleMap& map) {
     using namespace state;
+    const StateMatrix& P = map.Phi;
     const double skipped = std::abs(P(i, y)) + std::abs(P(i, v)) + std::abs(P(i, i_f)) + std::abs(P(i_f, y)) +
                            std::abs(P(i_f, v)) + P.block<4, 1>(0, ys).cwiseAbs().sum();
     if (skipped > 1e-14 * P.cwiseAbs().maxCoeff())
@@ -107,9 +131,10 @@ CascadeMap::CascadeMap(const Propagator& P) {
     vy = P(v, y), vv = P(v, v), vi = P(v, i), vf = P(v, i_f);
     ii = P(i, i), fi = P(i_f, i), ff = P(i_f, i_f);
     sy = P(ys, y), sv = P(ys, v), si = P(ys, i), sf = P(ys, i_f), ss = P(ys, ys);
-    y_f = P(y, augmented::f), v_f = P(v, augmented::f), s_f = P(ys, augmented::f);
-    y_u = P(y, augmented::i_cmd), v_u = P(v, augmented::i_cmd), i_u = P(i, augmented::i_cmd);
-    f_u = P(i_f, augmented::i_cmd), s_u = P(ys, augmented::i_cmd);
+    y_f = map.Gf[y], v_f = map.Gf[v], s_f = map.Gf[ys];
+    y_u = map.G0[y], v_u = map.G0[v], i_u = map.G0[i], f_u = map.G0[i_f], s_u = map.G0[ys];
+    y_p = map.G1[y], v_p = map.G1[v], i_p = map.G1[i], f_p = map.G1[i_f], s_p = map.G1[ys];
+    fractional = !map.G1.isZero(0.0);
 }
 
 int force_current_index(const Rig& rig) {

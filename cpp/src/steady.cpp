@@ -5,9 +5,9 @@
 
 namespace amb_fast {
 
-ClosedLoopMap::ClosedLoopMap(const Rig& rig, const Controller& c) {
-    const Propagator P = propagator(rig, c.period());
-    const int np = state::size, n = c.order(), d = c.delay, size = np + n + d;
+ClosedLoopMap::ClosedLoopMap(const Rig& rig, const Controller& c, double fraction) {
+    const SampleMap P = sample_map(rig, c.period());
+    const int np = state::size, n = c.order(), d = c.delay, prev = int(fraction > 0.0), size = np + n + d + prev;
     const int sensed = rig.sensor_bandwidth ? state::ys : state::y;
     M = Eigen::MatrixXd::Zero(size, size);
     noise_in = Eigen::VectorXd::Zero(size);
@@ -22,11 +22,14 @@ ClosedLoopMap::ClosedLoopMap(const Rig& rig, const Controller& c) {
         applied[np + n] = 1.0;
         applied_noise = 0.0;
     }
-    const Eigen::Matrix<double, state::size, state::size> Phi = P.topLeftCorner<state::size, state::size>();
-    const Eigen::Matrix<double, state::size, 1> Gu = P.block<state::size, 1>(0, augmented::i_cmd);
-    M.topLeftCorner(np, np) = Phi;
-    M.topRows(np) += Gu * applied;
-    noise_in.head(np) = Gu * applied_noise;
+    M.topLeftCorner(np, np) = P.Phi;
+    M.topRows(np) += P.G0 * applied;
+    noise_in.head(np) = P.G0 * applied_noise;
+    if (prev) {  // x gets G1 u_prev; u_prev' = the applied command
+        M.block(0, size - 1, np, 1) += P.G1;
+        M.row(size - 1) = applied;
+        noise_in[size - 1] = applied_noise;
+    }
     M.block(np, np, n, n) = c.A;
     M.block(np, sensed, n, 1) += c.B;
     noise_in.segment(np, n) = c.B;

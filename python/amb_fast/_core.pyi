@@ -34,6 +34,7 @@ class Rig:
         force_coupling_tau: float | None = None,
         clearance: float | None = None,
         current_limit: float | None = None,
+        dead_time: float = 0.0,
     ) -> None: ...
     def magnet_force(self, y: float, i: float) -> float: ...
     @property

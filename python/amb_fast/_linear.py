@@ -76,15 +76,58 @@ def plant_matrices(rig: Rig) -> tuple[np.ndarray, np.ndarray, list[str]]:
     return A, B, states
 
 
-def discrete_plant(rig: Rig, fs: float) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """Exact zero-order-hold ``Phi``, ``Gamma`` over ``1/fs`` via the augmented matrix exponential."""
-    A, B, states = plant_matrices(rig)
-    n = len(states)
-    M = np.zeros((n + 2, n + 2))
-    M[:n, :n] = A / fs
-    M[:n, n:] = B / fs
+def split_dead_time(dead_time: float, fs: float) -> tuple[int, float]:
+    """The dead time (s) as whole samples and the fraction of a sample left over (s), as the core splits it."""
+    T = 1.0 / fs
+    samples = int(np.floor(dead_time / T))
+    return samples, max(0.0, dead_time - samples * T)
+
+
+def _zoh(A: np.ndarray, B: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """Exact zero-order-hold ``Phi``, ``Gamma`` over ``h`` via the augmented matrix exponential."""
+    n, m = B.shape
+    M = np.zeros((n + m, n + m))
+    M[:n, :n] = A * h
+    M[:n, n:] = B * h
     E = expm(M)
-    return E[:n, :n], E[:n, n:], states
+    return E[:n, :n], E[:n, n:]
+
+
+def discrete_plant(rig: Rig, fs: float) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Exact zero-order-hold ``Phi``, ``Gamma`` over ``1/fs`` (inputs: force N, current command A).
+
+    With a dead time ``tau = m T + delta`` the plant carries it inside as a line of commands
+    ``dead1 .. dead(m)`` (and one more, ``dead(m+1)``, when ``delta > 0``): over ``[kT, kT + delta)``
+    the amplifier still receives the previous command, so ``x[k+1] = Phi x + Gf f + G0 u[k-m] +
+    G1 u[k-m-1]`` with ``G0 = Gamma_u(T - delta)``, ``G1 = Phi(T - delta) Gamma_u(delta)`` (the modified
+    z-transform of the zero-order hold).
+    """
+    A, B, states = plant_matrices(rig)
+    T = 1.0 / fs
+    Phi, Gamma = _zoh(A, B, T)
+    samples, fraction = split_dead_time(rig.dead_time, fs)
+    line = samples + (fraction > 0)
+    if line == 0:
+        return Phi, Gamma, states
+    n = len(states)
+    G0, G1 = Gamma[:, 1], np.zeros(n)
+    if fraction > 0:
+        late_Phi, late_Gamma = _zoh(A, B, T - fraction)
+        G0, G1 = late_Gamma[:, 1], late_Phi @ _zoh(A, B, fraction)[1][:, 1]
+    Phi2 = np.zeros((n + line, n + line))
+    Gamma2 = np.zeros((n + line, 2))
+    Phi2[:n, :n] = Phi
+    Gamma2[:n, 0] = Gamma[:, 0]
+    if samples == 0:
+        Gamma2[:n, 1] = G0
+    else:
+        Phi2[:n, n + samples - 1] = G0
+    if fraction > 0:
+        Phi2[:n, n + line - 1] = G1
+    Gamma2[n, 1] = 1.0  # dead1' = u
+    for j in range(1, line):
+        Phi2[n + j, n + j - 1] = 1.0
+    return Phi2, Gamma2, states + [f"dead{j + 1}" for j in range(line)]
 
 
 def core_controller(controller: AnyController) -> Any:
@@ -138,7 +181,12 @@ def closed_loop(rig: Rig, controller: AnyController) -> tuple[np.ndarray, np.nda
     A = np.block([[Phi + gu @ Dc @ sensor, gu @ Cc], [Bc @ sensor, Ac]])
     B = np.vstack([gf, np.zeros((m, 1))])
     command = np.hstack([Dc @ sensor, Cc])
-    current = np.eye(n + m)[states.index("i")][None, :] if "i" in states else command
+    if "i" in states:
+        current = np.eye(n + m)[states.index("i")][None, :]
+    elif "dead1" in states and split_dead_time(rig.dead_time, controller.fs)[0] > 0:  # the delayed command
+        current = np.eye(n + m)[states.index(f"dead{split_dead_time(rig.dead_time, controller.fs)[0]}")][None, :]
+    else:
+        current = command
     C = np.vstack([np.hstack([sensor, np.zeros((1, m))]), current])
     return A, B, C, np.zeros((2, 1))
 

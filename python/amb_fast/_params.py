@@ -54,6 +54,10 @@ class Rig:
         Amplifier limit on the control current |i|, A; the command is clipped there and the clipped
         samples are counted (``Estimate.saturated_samples``). With the non-linear force law the coil
         currents i0 +/- i cannot go negative, so |i| <= ``bias_current`` always. ``None``: no other limit.
+    dead_time : float
+        Transport delay from the current command to the amplifier, s (DSP and converter latency; rarely
+        a whole number of samples). Discretised exactly: whole samples plus a fraction (modified
+        z-transform of the zero-order hold). Default 0.
     substeps : int
         Integrator steps per controller sample for the non-linear force law (integrating-factor RK4:
         the linear part is exact, the non-linear remainder is fourth order; 2 steps keep the relative
@@ -75,6 +79,7 @@ class Rig:
     force_coupling_tau: float | None = None
     clearance: float | None = None
     current_limit: float | None = None
+    dead_time: float = 0.0
 
     def __post_init__(self) -> None:
         real("mass", self.mass, "kg", positive=True)
@@ -93,6 +98,7 @@ class Rig:
         require(real("force_noise", self.force_noise, "N rms") >= 0, "force_noise", self.force_noise, ">= 0 (N rms)")
         require(real("mass_loading", self.mass_loading, "kg") >= 0, "mass_loading", self.mass_loading, ">= 0 (kg)")
         optional_positive("force_coupling_tau", self.force_coupling_tau, "s")
+        require(real("dead_time", self.dead_time, "s") >= 0, "dead_time", self.dead_time, ">= 0 (s)")
         optional_positive("current_limit", self.current_limit, "A")
         clearance = optional_positive("clearance", self.clearance, "m")
         if clearance is not None and self.force_law == "nonlinear":

@@ -23,19 +23,40 @@ def magnet_force(rig: Rig, y: float, i: float) -> float:
     return km * ((i0 - i) ** 2 / (g - y) ** 2 - (i0 + i) ** 2 / (g + y) ** 2)
 
 
+def _zoh(A: np.ndarray, B: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
+    n = A.shape[0]
+    Phi, Gamma, *_ = cont2discrete((A, B, np.eye(n), np.zeros((n, B.shape[1]))), h, method="zoh")
+    return Phi, Gamma
+
+
+def _dead_time(rig: Rig, T: float) -> tuple[int, float]:
+    """Whole samples and the fraction left over (s) of the rig's dead time."""
+    whole = int(np.floor(rig.dead_time / T))
+    return whole, max(0.0, rig.dead_time - whole * T)
+
+
 def simulate(rig: Rig, pid: PID, force: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Closed loop from rest; returns (sensor displacement m, coil current A) at every sample."""
+    """Closed loop from rest; returns (sensor displacement m, coil current A) at every sample.
+
+    A dead time delays the command by its whole samples (a longer queue) and, for its fraction
+    delta, feeds the amplifier the previous command over the first delta of each sample: the sample
+    is integrated in two pieces.
+    """
     force = np.asarray(force, dtype=float)
     T = 1.0 / pid.fs
     A, B, states = plant_matrices(rig)
     n = len(states)
-    Phi, Gamma, *_ = cont2discrete((A, B, np.eye(n), np.zeros((n, 2))), T, method="zoh")
+    whole, fraction = _dead_time(rig, T)
+    Phi, Gamma = _zoh(A, B, T)
+    if fraction > 0:
+        early, late = _zoh(A, B, fraction), _zoh(A, B, T - fraction)
     sensed = states.index("ys") if "ys" in states else 0
     a = np.exp(-2 * np.pi * pid.derivative_cutoff * T) if pid.derivative_cutoff is not None else 0.0
 
     x = np.zeros(n)
     integral = derivative = e_prev = 0.0
-    pending = deque([0.0] * pid.delay)
+    previous = 0.0
+    pending = deque([0.0] * (pid.delay + whole))
     displacement = np.empty(force.size)
     current = np.empty(force.size)
     for k, f in enumerate(force):
@@ -47,10 +68,17 @@ def simulate(rig: Rig, pid: PID, force: np.ndarray) -> tuple[np.ndarray, np.ndar
         i_cmd = pending.popleft()
         displacement[k] = e
         current[k] = x[states.index("i")] if "i" in states else i_cmd
-        if rig.force_law == "linear":
+        if rig.force_law == "linear" and fraction > 0:
+            x = early[0] @ x + early[1] @ np.array([f, previous])
+            x = late[0] @ x + late[1] @ np.array([f, i_cmd])
+        elif rig.force_law == "linear":
             x = Phi @ x + Gamma @ np.array([f, i_cmd])
+        elif fraction > 0:
+            x = _rk4_sample(rig, A, B, states, x, f, previous, fraction)
+            x = _rk4_sample(rig, A, B, states, x, f, i_cmd, T - fraction)
         else:
             x = _rk4_sample(rig, A, B, states, x, f, i_cmd, T)
+        previous = i_cmd
     return displacement, current
 
 
@@ -78,14 +106,24 @@ def _rk4_sample(
 def receptance(rig: Rig, pid: PID, freq: np.ndarray) -> np.ndarray:
     """Y/F at ``freq`` (Hz) by composing transfer functions, not by the closed-loop state space:
     ys/f = P_f / (1 - P_i G z^-d), with the plant's two ZOH transfer functions P_f, P_i from
-    :func:`scipy.signal.cont2discrete` and the digital PID G(z) written out from MODEL.md."""
+    :func:`scipy.signal.cont2discrete` (with the dead time: whole samples as z^-m, the fraction as
+    the two pieces of the sample) and the digital PID G(z) written out from MODEL.md."""
     T = 1.0 / pid.fs
     A, B, states = plant_matrices(rig)
     n = len(states)
     sensed = states.index("ys") if "ys" in states else 0
-    Phi, Gamma, *_ = cont2discrete((A, B, np.eye(n), np.zeros((n, 2))), T, method="zoh")
+    Phi, Gamma = _zoh(A, B, T)
     z = np.exp(2j * np.pi * np.asarray(freq, dtype=float) * T)
-    P = np.array([np.linalg.solve(zk * np.eye(n) - Phi, Gamma)[sensed] for zk in z])  # (freq, 2)
+    whole, fraction = _dead_time(rig, T)
+    if fraction > 0:  # the command reaches the plant as G0 u[k] + G1 u[k-1] (then the whole samples)
+        late_Phi, late_Gamma = _zoh(A, B, T - fraction)
+        G0, G1 = late_Gamma[:, 1], late_Phi @ _zoh(A, B, fraction)[1][:, 1]
+    else:
+        G0, G1 = Gamma[:, 1], np.zeros(n)
+    P = np.array(
+        [np.linalg.solve(zk * np.eye(n) - Phi, np.column_stack([Gamma[:, 0], (G0 + G1 / zk) * zk**-whole]))[sensed]
+         for zk in z]
+    )  # (freq, 2)  # fmt: skip
     a = np.exp(-2 * np.pi * pid.derivative_cutoff * T) if pid.derivative_cutoff is not None else 0.0
     G = pid.kp + pid.ki * T / (1 - 1 / z) + pid.kd * (1 - a) * (1 - 1 / z) / (T * (1 - a / z))
     return P[:, 0] / (1 - P[:, 1] * G * z ** (-pid.delay))

@@ -53,6 +53,7 @@ struct Channels {
 class Loop {
 public:
     // The seed fixes the measurement noise; it is unused when the rig has none.
+    // The controller's delay is lengthened by the rig's dead time in whole samples.
     Loop(const Rig& rig, const Controller& controller, std::uint64_t seed = 0);
 
     // Advances n samples of zero-order-held force (N) and records them. Throws Touchdown when the
@@ -77,10 +78,15 @@ private:
     void run_linear(const double* force, Eigen::Index n, Channels out, const double* noise);
     template <int N>
     void run_linear(const double* force, Eigen::Index n, Channels out, const double* noise);
-    template <int N, int sensed, bool has_amp, bool checked>
+    template <int N, int sensed, bool has_amp, bool checked, bool fractional>
     void run_linear(const double* force, Eigen::Index n, Channels out, const double* noise);
     void run_nonlinear(const double* force, Eigen::Index n, Channels out, const double* noise);
-    void advance_nonlinear(AugmentedVector& X) const;
+    // Integrator steps over one stretch of a sample with constant inputs (steps of h).
+    struct Stretch {
+        double h = 0.0;
+        Propagator full, half;
+    };
+    void advance_nonlinear(AugmentedVector& X, const Stretch& stretch) const;
     [[noreturn]] void fail(Eigen::Index sample, const char* what) const;
 
     Rig rig_;
@@ -89,8 +95,9 @@ private:
     int sensed_;         // state read by the sensor: ys, or y itself
     bool has_amp_;       // coil current is a state, or the command itself
     std::optional<CascadeMap> map_;  // linear law: the one-sample map
-    Propagator P_;       // non-linear law: over one substep
-    Propagator P_half_;  // over half a substep (non-linear law)
+    Stretch early_, late_;  // non-linear law: [0, fraction) with the previous command, then the rest
+    double fraction_;       // the dead time's fraction of a sample (s)
+    double u_prev_ = 0.0;   // the previous applied command, felt over that fraction (A)
     int drive_;          // augmented index of the force-producing current
     MagnetPair magnets_;
     StateVector x_ = StateVector::Zero();

@@ -26,6 +26,7 @@ struct Rig {
     std::optional<double> force_coupling_tau;  // s, AC coupling of the piezo force transducer; empty = DC
     std::optional<double> clearance;      // m, mechanical clearance; empty: the air gap (non-linear law) or none
     std::optional<double> current_limit;  // A, amplifier limit on |i|; empty: i0 (non-linear law) or none
+    double dead_time = 0.0;        // s, transport delay from the current command to the amplifier
 
     // Throws std::invalid_argument naming the parameter and the value.
     void validate() const;
@@ -47,7 +48,7 @@ struct Rig {
                sensor_bandwidth == o.sensor_bandwidth && substeps == o.substeps && sensor_noise == o.sensor_noise &&
                force_noise == o.force_noise && mass_loading == o.mass_loading &&
                force_coupling_tau == o.force_coupling_tau && clearance == o.clearance &&
-               current_limit == o.current_limit;
+               current_limit == o.current_limit && dead_time == o.dead_time;
     }
 };
 
@@ -84,13 +85,30 @@ constexpr int f = state::size, i_cmd = state::size + 1, size = state::size + 2;
 using AugmentedVector = Eigen::Matrix<double, augmented::size, 1>;
 using Propagator = Eigen::Matrix<double, augmented::size, augmented::size>;
 
+// The dead time as whole samples and the fraction of a sample left over (s, 0 <= fraction < T).
+struct DeadTime {
+    int samples;
+    double fraction;
+};
+DeadTime split_dead_time(double dead_time, double T);
+
+// The exact one-sample map of the linear plant with the fractional part of the dead time: over
+// [kT, kT + fraction) the amplifier still receives the previous command, so
+// x[k+1] = Phi x[k] + Gf f[k] + G0 u[k] + G1 u[k-1] (modified z-transform of the zero-order hold),
+// G0 = Gamma_u(T - fraction), G1 = Phi(T - fraction) Gamma_u(fraction); without a fraction G1 = 0.
+struct SampleMap {
+    StateMatrix Phi;
+    StateVector Gf, G0, G1;
+};
+SampleMap sample_map(const Rig& rig, double T);
+
 // The exact one-sample map of the linear plant, written out. The lags form a cascade (amplifier ->
 // eddy current -> platform -> sensor), so Phi is block lower-triangular in that order: only 16 of
 // its 25 entries can be non-zero, and only those are multiplied. The loops that use it are bound by
 // the latency of the sample-to-sample chain, so independent terms are summed pairwise. Every loop
 // (single runs and batched sweeps) calls this one function, so all agree bit for bit.
 struct CascadeMap {
-    explicit CascadeMap(const Propagator& P);  // throws std::logic_error if P lost the structure
+    explicit CascadeMap(const SampleMap& map);  // throws std::logic_error if the map lost the structure
 
     void advance(double& xy, double& xv, double& xi, double& xf, double& xs, double f, double u) const {
         const double ny = (yy * xy + yv * xv) + (yi * xi + yf * xf) + (y_f * f + y_u * u);
@@ -102,9 +120,22 @@ struct CascadeMap {
         xv = nv;
         xs = ns;
     }
+    // The same with the previous command u_prev felt over the dead time's fraction of the sample.
+    void advance(double& xy, double& xv, double& xi, double& xf, double& xs, double f, double u, double u_prev) const {
+        const double ny = ((yy * xy + yv * xv) + (yi * xi + yf * xf) + (y_f * f + y_u * u)) + y_p * u_prev;
+        const double nv = ((vy * xy + vv * xv) + (vi * xi + vf * xf) + (v_f * f + v_u * u)) + v_p * u_prev;
+        const double ns = (((sy * xy + sv * xv) + (si * xi + sf * xf)) + (ss * xs + (s_f * f + s_u * u))) + s_p * u_prev;
+        xf = ((fi * xi + ff * xf) + f_u * u) + f_p * u_prev;
+        xi = (ii * xi + i_u * u) + i_p * u_prev;
+        xy = ny;
+        xv = nv;
+        xs = ns;
+    }
 
     double yy, yv, yi, yf, vy, vv, vi, vf, ii, fi, ff, sy, sv, si, sf, ss;  // Phi
-    double y_f, v_f, s_f, y_u, v_u, i_u, f_u, s_u;                         // Gamma: force, command
+    double y_f, v_f, s_f, y_u, v_u, i_u, f_u, s_u;                         // Gf, G0: force, command
+    double y_p, v_p, i_p, f_p, s_p;                                        // G1: previous command
+    bool fractional;                                                       // G1 != 0
 };
 
 // Linear(ised) continuous model x' = A x + B [f, i_cmd].

@@ -10,10 +10,11 @@
 namespace amb_fast {
 
 // The loop's state stacked as z = [x (the plant's 5 states), s (the controller's n), line (the delay
-// line, oldest command first)]. Without noise or limits, z[k+1] = M z[k] + (force term); white sensor
+// line, oldest command first), u_prev (the previous applied command, with a fractional dead time)].
+// The controller's delay here includes the dead time's whole samples. Without noise or limits, z[k+1] = M z[k] + (force term); white sensor
 // noise n[k] adds noise_in * n[k] (it enters through the measurement e).
 struct ClosedLoopMap {
-    ClosedLoopMap(const Rig& rig, const Controller& controller);
+    ClosedLoopMap(const Rig& rig, const Controller& controller, double fraction);
     Eigen::MatrixXd M;
     Eigen::VectorXd noise_in;
 };
