@@ -11,7 +11,7 @@ from collections import deque
 import numpy as np
 from scipy.signal import cont2discrete
 
-from ._linear import plant_matrices
+from ._linear import AnyController, plant_matrices, state_space
 from ._params import PID, Rig
 
 
@@ -35,8 +35,38 @@ def _dead_time(rig: Rig, T: float) -> tuple[int, float]:
     return whole, max(0.0, rig.dead_time - whole * T)
 
 
-def simulate(rig: Rig, pid: PID, force: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+class _Law:
+    """The controller's difference equations: the PID written out from MODEL.md, any other
+    controller as its state space (s' = A s + B e, u = C s + D e)."""
+
+    def __init__(self, controller: AnyController) -> None:
+        self.pid = controller if isinstance(controller, PID) else None
+        T = 1.0 / controller.fs
+        if self.pid is not None:
+            cutoff = self.pid.derivative_cutoff
+            self.a = np.exp(-2 * np.pi * cutoff * T) if cutoff is not None else 0.0
+            self.integral = self.derivative = self.e_prev = 0.0
+        else:
+            self.A, self.B, self.C, self.D = state_space(controller)
+            self.s = np.zeros(self.A.shape[0])
+        self.T = T
+
+    def __call__(self, e: float) -> float:
+        if self.pid is not None:
+            pid, T = self.pid, self.T
+            self.integral += pid.ki * T * e
+            self.derivative = self.a * self.derivative + pid.kd * (1 - self.a) * (e - self.e_prev) / T
+            self.e_prev = e
+            return pid.kp * e + self.integral + self.derivative
+        u = float(self.C[0] @ self.s + self.D[0, 0] * e)
+        self.s = self.A @ self.s + self.B[:, 0] * e
+        return u
+
+
+def simulate(rig: Rig, pid: AnyController, force: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Closed loop from rest; returns (sensor displacement m, coil current A) at every sample.
+
+    ``pid``: a :class:`PID` (its law written out from MODEL.md) or any controller (its state space).
 
     A dead time delays the command by its whole samples (a longer queue) and, for its fraction
     delta, feeds the amplifier the previous command over the first delta of each sample: the sample
@@ -51,20 +81,16 @@ def simulate(rig: Rig, pid: PID, force: np.ndarray) -> tuple[np.ndarray, np.ndar
     if fraction > 0:
         early, late = _zoh(A, B, fraction), _zoh(A, B, T - fraction)
     sensed = states.index("ys") if "ys" in states else 0
-    a = np.exp(-2 * np.pi * pid.derivative_cutoff * T) if pid.derivative_cutoff is not None else 0.0
+    law = _Law(pid)
 
     x = np.zeros(n)
-    integral = derivative = e_prev = 0.0
     previous = 0.0
     pending = deque([0.0] * (pid.delay + whole))
     displacement = np.empty(force.size)
     current = np.empty(force.size)
     for k, f in enumerate(force):
         e = x[sensed]
-        integral += pid.ki * T * e
-        derivative = a * derivative + pid.kd * (1 - a) * (e - e_prev) / T
-        e_prev = e
-        pending.append(pid.kp * e + integral + derivative)
+        pending.append(law(e))
         i_cmd = pending.popleft()
         displacement[k] = e
         current[k] = x[states.index("i")] if "i" in states else i_cmd
@@ -103,7 +129,7 @@ def _rk4_sample(
     return x
 
 
-def receptance(rig: Rig, pid: PID, freq: np.ndarray) -> np.ndarray:
+def receptance(rig: Rig, pid: AnyController, freq: np.ndarray) -> np.ndarray:
     """Y/F at ``freq`` (Hz) by composing transfer functions, not by the closed-loop state space:
     ys/f = P_f / (1 - P_i G z^-d), with the plant's two ZOH transfer functions P_f, P_i from
     :func:`scipy.signal.cont2discrete` (with the dead time: whole samples as z^-m, the fraction as
@@ -124,8 +150,13 @@ def receptance(rig: Rig, pid: PID, freq: np.ndarray) -> np.ndarray:
         [np.linalg.solve(zk * np.eye(n) - Phi, np.column_stack([Gamma[:, 0], (G0 + G1 / zk) * zk**-whole]))[sensed]
          for zk in z]
     )  # (freq, 2)  # fmt: skip
-    a = np.exp(-2 * np.pi * pid.derivative_cutoff * T) if pid.derivative_cutoff is not None else 0.0
-    G = pid.kp + pid.ki * T / (1 - 1 / z) + pid.kd * (1 - a) * (1 - 1 / z) / (T * (1 - a / z))
+    if isinstance(pid, PID):
+        a = np.exp(-2 * np.pi * pid.derivative_cutoff * T) if pid.derivative_cutoff is not None else 0.0
+        G = pid.kp + pid.ki * T / (1 - 1 / z) + pid.kd * (1 - a) * (1 - 1 / z) / (T * (1 - a / z))
+    else:  # G(z) = C (zI - A)^-1 B + D of the controller's own state space
+        Ac, Bc, Cc, Dc = state_space(pid)
+        m = Ac.shape[0]
+        G = np.array([(Cc @ np.linalg.solve(zk * np.eye(m) - Ac, Bc))[0, 0] if m else 0.0 for zk in z]) + Dc[0, 0]
     return P[:, 0] / (1 - P[:, 1] * G * z ** (-pid.delay))
 
 
