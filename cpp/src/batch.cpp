@@ -145,6 +145,7 @@ void start_lanes_periodic(Lanes& lane, const SweepPoint* points, const Eigen::Ve
     linear.sensor_noise = linear.force_noise = 0.0;
     linear.clearance.reset();
     linear.current_limit.reset();
+    const SampleMap plant = sample_map(linear, points[0].controller.period());
     ForceTransducer settled(rig, points[0].controller.period());
     Eigen::VectorXd recorded(L);
     settled.record(period_force.data(), L, recorded.data());
@@ -159,7 +160,7 @@ void start_lanes_periodic(Lanes& lane, const SweepPoint* points, const Eigen::Ve
         for (int j = 0; j < order; ++j) z[state::size + j] = probe.state[static_cast<std::size_t>(j) * n + g];
         for (int j = 0; j < d; ++j)
             z[state::size + order + j] = probe.held[((head + static_cast<std::size_t>(j)) % static_cast<std::size_t>(d)) * n + g];
-        const ClosedLoopMap loop(linear, c, dead.fraction);
+        const ClosedLoopMap loop(plant, sensed, c, dead.fraction);
         z = periodic_start(loop.M, L, z);
         if (rig.sensor_noise > 0.0) {
             NormalStream draws(start_noise_seed(points[g].seed));

@@ -37,7 +37,8 @@ Loop::Loop(const Rig& rig, const Controller& controller, std::uint64_t seed)
       transducer_(rig, controller.period()) {
     fraction_ = split_dead_time(rig_.dead_time, T_).fraction;
     if (rig_.force_law == ForceLaw::linear) {
-        map_.emplace(sample_map(rig_, T_));
+        plant_.emplace(sample_map(rig_, T_));
+        map_.emplace(*plant_);
     } else {
         auto stretch = [&](double length) {
             const double h = length / rig_.substeps;
@@ -225,7 +226,7 @@ void Loop::start_periodic(const double* period_force, Eigen::Index L) {
     Loop probe(quiet, own);
     Eigen::VectorXd f(L), y(L), i(L);
     probe.run(period_force, L, {f.data(), y.data(), i.data()});
-    const ClosedLoopMap map(quiet, controller_.controller(), fraction_);
+    const ClosedLoopMap map(plant_ ? *plant_ : sample_map(quiet, T_), sensed_, controller_.controller(), fraction_);
     Eigen::VectorXd z = periodic_start(map.M, L, probe.stacked_state());
     if (rig_.sensor_noise > 0.0) {
         NormalStream draws(start_noise_seed(seed_));

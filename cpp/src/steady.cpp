@@ -5,10 +5,8 @@
 
 namespace amb_fast {
 
-ClosedLoopMap::ClosedLoopMap(const Rig& rig, const Controller& c, double fraction) {
-    const SampleMap P = sample_map(rig, c.period());
+ClosedLoopMap::ClosedLoopMap(const SampleMap& P, int sensed, const Controller& c, double fraction) {
     const int np = state::size, n = c.order(), d = c.delay, prev = int(fraction > 0.0), size = np + n + d + prev;
-    const int sensed = rig.sensor_bandwidth ? state::ys : state::y;
     M = Eigen::MatrixXd::Zero(size, size);
     noise_in = Eigen::VectorXd::Zero(size);
     // e = x[sensed] (+ noise); u = C s + D e; the applied command is line[0] (or u without a delay).

@@ -94,7 +94,8 @@ private:
     double T_;
     int sensed_;         // state read by the sensor: ys, or y itself
     bool has_amp_;       // coil current is a state, or the command itself
-    std::optional<CascadeMap> map_;  // linear law: the one-sample map
+    std::optional<SampleMap> plant_;  // linear law: the one-sample map
+    std::optional<CascadeMap> map_;   // the same, written out for the kernel
     Stretch early_, late_;  // non-linear law: [0, fraction) with the previous command, then the rest
     double fraction_;       // the dead time's fraction of a sample (s)
     double u_prev_ = 0.0;   // the previous applied command, felt over that fraction (A)

@@ -14,7 +14,11 @@ namespace amb_fast {
 // The controller's delay here includes the dead time's whole samples. Without noise or limits, z[k+1] = M z[k] + (force term); white sensor
 // noise n[k] adds noise_in * n[k] (it enters through the measurement e).
 struct ClosedLoopMap {
-    ClosedLoopMap(const Rig& rig, const Controller& controller, double fraction);
+    ClosedLoopMap(const Rig& rig, const Controller& controller, double fraction)
+        : ClosedLoopMap(sample_map(rig, controller.period()), rig.sensor_bandwidth ? state::ys : state::y, controller,
+                        fraction) {}
+    // From the plant's one-sample map (shared by many controllers) and the state the sensor reads.
+    ClosedLoopMap(const SampleMap& plant, int sensed, const Controller& controller, double fraction);
     Eigen::MatrixXd M;
     Eigen::VectorXd noise_in;
 };
