@@ -28,12 +28,23 @@ _GAIN_KINDS = ("gain", "tf", "zpk", "ss", "sos", "continuous")
 _RAW_KINDS = ("tf", "zpk", "ss", "sos", "continuous")
 
 
+def _real_array(name: str, values: Any, what: str) -> np.ndarray:
+    """``values`` as a float array; complex values only with zero imaginary parts."""
+    try:
+        array = np.asarray(values)
+        if np.iscomplexobj(array):
+            require(bool(np.all(array.imag == 0)), name, values, f"{what} (not complex)")
+            array = array.real
+        return np.asarray(array, dtype=float)
+    except (TypeError, ValueError) as error:
+        if str(error).startswith(name + " must"):
+            raise
+        raise ValueError(f"{name} must be {what}, got {values!r}") from None
+
+
 def _floats(name: str, values: ArrayLike) -> np.ndarray:
     """A 1-D array of finite real coefficients."""
-    try:
-        array = np.atleast_1d(np.asarray(values, dtype=float))
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a sequence of real numbers, got {values!r}") from None
+    array = np.atleast_1d(_real_array(name, values, "a sequence of real numbers"))
     require(array.ndim == 1 and array.size > 0, name, values, "a non-empty 1-D sequence of coefficients")
     require(bool(np.all(np.isfinite(array))), name, values, "finite (no NaN or inf)")
     return array
@@ -52,8 +63,7 @@ def _proper_pair(num: ArrayLike, den: ArrayLike, what: str) -> tuple[np.ndarray,
         n.size <= d.size,
         "num",
         num,
-        f"of degree <= that of den (degree {d.size - 1}): a {what} of higher numerator degree is improper "
-        "(non-causal)",
+        f"of degree <= that of den (degree {d.size - 1}): a {what} of higher numerator degree is improper (non-causal)",
     )
     require(d.size - 1 <= MAX_ORDER, "den", den, f"of degree <= {MAX_ORDER} (the largest controller order)")
     return n, d
@@ -124,24 +134,63 @@ def _delay_ss(samples: int) -> Matrices:
     return A, B, C, np.zeros((1, 1))
 
 
-def _sos_ss(sections: np.ndarray) -> Matrices:
-    """Second-order sections (rows b0 b1 b2 a0 a1 a2, positive powers of z) connected in series."""
-    ss = _empty()
-    ss = (ss[0], ss[1], ss[2], np.ones((1, 1)))
-    for row in np.atleast_2d(sections):
-        ss = _series_ss(ss, _section_ss(row[:3], row[3:]))
+def _sections_ss(sections: Sequence[tuple[np.ndarray, np.ndarray]]) -> Matrices:
+    """Sections b(z)/a(z) (positive powers, degree <= 2) connected in series."""
+    A, B, C, _ = _empty()
+    ss: Matrices = (A, B, C, np.ones((1, 1)))
+    for b, a in sections:
+        ss = _series_ss(ss, _section_ss(b, a))
     return ss
 
 
+def _split(roots: np.ndarray) -> tuple[list[float], list[complex]]:
+    """Real roots (sorted) and the upper members of the complex-conjugate pairs."""
+    tol = 1e-10 * np.maximum(1.0, np.abs(roots))
+    real_roots = sorted(float(r.real) for r, t in zip(roots, tol) if abs(r.imag) <= t)
+    upper = [complex(r) for r, t in zip(roots, tol) if r.imag > t]
+    return real_roots, upper
+
+
+def _factors(roots: np.ndarray) -> list[list[complex]]:
+    """Roots grouped into quadratic factors (a conjugate pair, or two neighbouring real roots) and at
+    most one linear factor (the last)."""
+    real_roots, upper = _split(roots)
+    groups: list[list[complex]] = [[r, r.conjugate()] for r in upper]
+    groups += [[real_roots[j], real_roots[j + 1]] for j in range(0, len(real_roots) - 1, 2)]
+    if len(real_roots) % 2:
+        groups.append([real_roots[-1]])
+    return groups
+
+
 def _zpk_ss(zeros: np.ndarray, poles: np.ndarray, k: float) -> Matrices:
-    """Series of second-order sections (``scipy.signal.zpk2sos``, pairing "minimal", which keeps the
-    relative degree: no zeros are added at the origin, unlike ``tf2sos``)."""
+    """Series of first- and second-order sections: poles grouped in conjugate pairs (or pairs of real
+    poles), each quadratic factor of zeros given to the nearest free pole pair, most resonant first.
+    The relative degree is kept: no zeros are added at the origin (unlike ``scipy.signal.tf2sos``)."""
     if poles.size == 0:
         A, B, C, _ = _empty()
         return A, B, C, np.array([[k]])
-    if k == 0:
-        zeros = np.zeros(0)
-    return _sos_ss(signal.zpk2sos(zeros, poles, k, pairing="minimal"))
+    dens = _factors(poles)
+    nums: list[list[complex]] = [[] for _ in dens]
+    free = set(range(len(dens)))
+
+    def nearest(group: list[complex], candidates: list[int]) -> int:
+        return min(candidates, key=lambda j: min(abs(z - p) for z in group for p in dens[j]))
+
+    zero_groups = _factors(zeros) if k != 0 else []
+    linear = [g for g in zero_groups if len(g) == 1]
+    quadratic = sorted((g for g in zero_groups if len(g) == 2), key=lambda g: abs(1 - abs(g[0])))
+    for group in linear + quadratic:
+        fits = [j for j in free if len(dens[j]) >= len(group)]
+        if len(group) == 1 and any(len(dens[j]) == 1 for j in fits):
+            fits = [j for j in fits if len(dens[j]) == 1]
+        j = nearest(group, fits)
+        nums[j] = group
+        free.discard(j)
+    sections = []
+    for j, (num_roots, den_roots) in enumerate(zip(nums, dens)):
+        b = np.atleast_1d(np.real(np.poly(num_roots))) * (k if j == 0 else 1.0)
+        sections.append((b, np.atleast_1d(np.real(np.poly(den_roots)))))
+    return _sections_ss(sections)
 
 
 def _conjugate_pairs(name: str, roots: np.ndarray, given: Any) -> None:
@@ -203,8 +252,8 @@ class Controller:
     integrator) are allowed.
 
     Realisation: from a transfer function, zeros/poles/gain or second-order sections the state space
-    is a series of first- and second-order sections (``scipy.signal.zpk2sos``), each in controllable
-    canonical form, never the companion form of a high-order polynomial; a state space given to
+    is a series of first- and second-order sections (conjugate pole pairs, each with its nearest zeros),
+    each in controllable canonical form, never the companion form of a high-order polynomial; a state space given to
     :meth:`from_ss` is kept as it is. A series stacks the parts' states block-triangularly, a parallel
     block-diagonally.
 
@@ -257,7 +306,7 @@ class Controller:
         fs: float,
         delay: int,
         *,
-        continuous: tuple[np.ndarray, np.ndarray] | tuple[Poly, Poly] | None = None,
+        continuous: tuple[ArrayLike, ArrayLike] | None = None,
         kind: str = "ss",
         local: tuple[tuple[str, float], ...] = (),
         parts: tuple[Controller, ...] = (),
@@ -305,6 +354,7 @@ class Controller:
             Extra whole-sample computation delay.
         """
         real("fs", fs, "Hz", positive=True)
+        integer("delay", delay, 0)
         n, d = _proper_pair(num, den, "z-domain transfer function")
         k = float(n[0] / d[0])
         ss = _zpk_ss(np.roots(n), np.roots(d), k) if k != 0 else _zpk_ss(np.zeros(0), np.roots(d), 0.0)
@@ -315,6 +365,7 @@ class Controller:
         """From zeros ``z``, poles ``p`` (z-plane, real or in conjugate pairs, ``len(z) <= len(p) <= 24``)
         and gain ``k``: ``k prod(z - z_i) / prod(z - p_j) z^-delay``; ``fs`` in Hz."""
         real("fs", fs, "Hz", positive=True)
+        integer("delay", delay, 0)
         zeros, poles = (np.atleast_1d(np.asarray(v, dtype=complex)) for v in (z, p))
         for name, roots, given in (("z", zeros, z), ("p", poles, p)):
             require(roots.ndim == 1 and bool(np.all(np.isfinite(roots))), name, given, "a 1-D sequence of finite roots")
@@ -326,33 +377,34 @@ class Controller:
 
     @classmethod
     def from_sos(cls, sos: ArrayLike, fs: float, delay: int = 0) -> Controller:
-        """From second-order sections (rows ``b0 b1 b2 a0 a1 a2``, ``scipy.signal`` layout, ``a0 != 0``)
-        in series, realised section by section; ``fs`` in Hz."""
+        """From second-order sections in series (rows ``b0 b1 b2 a0 a1 a2``, ``scipy.signal`` layout),
+        realised section by section; ``fs`` in Hz. Each row is ``(b0 z^2 + b1 z + b2) / (a0 z^2 + a1 z +
+        a2)``, the same as in powers of z^-1; ``a0 != 0``, or ``b0 = a0 = 0`` for a first-order section
+        (as ``scipy.signal.zpk2sos(..., pairing="minimal")`` writes them)."""
         real("fs", fs, "Hz", positive=True)
+        integer("delay", delay, 0)
         try:
             array = np.atleast_2d(np.asarray(sos, dtype=float))
         except (TypeError, ValueError):
             raise ValueError(f"sos must be an array of shape (sections, 6), got {sos!r}") from None
         require(array.ndim == 2 and array.shape[1] == 6 and array.shape[0] > 0, "sos", sos, "of shape (sections, 6)")
         require(bool(np.all(np.isfinite(array))), "sos", sos, "finite (no NaN or inf)")
-        require(bool(np.all(array[:, 3] != 0)), "sos", sos, "with a0 != 0 in every section")
-        ss = _sos_ss(array)
+        lead = [int(np.argmax(row[3:] != 0)) if np.any(row[3:] != 0) else 3 for row in array]
+        causal = all(k < 3 and not np.any(row[:k]) for k, row in zip(lead, array))
+        require(causal, "sos", sos, "causal in every section: a0 != 0, or b0 = a0 = 0 for a first-order one")
+        ss = _sections_ss([(row[:3], row[3:]) for row in array])
         require(ss[0].shape[0] <= MAX_ORDER, "sos", sos, f"of total order <= {MAX_ORDER}, got {ss[0].shape[0]}")
         return cls._raw("sos", ss, fs, delay)
 
     @classmethod
-    def from_ss(
-        cls, A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike, fs: float, delay: int = 0
-    ) -> Controller:
+    def from_ss(cls, A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike, fs: float, delay: int = 0) -> Controller:
         """From a discrete state space (kept as given): A (n, n), B (n, 1), C (1, n), D (1, 1); a 1-D B or
         C and a scalar D are read as a column, a row and 1x1. n <= 24; ``fs`` in Hz."""
         real("fs", fs, "Hz", positive=True)
+        integer("delay", delay, 0)
         arrays = {}
         for name, value in (("A", A), ("B", B), ("C", C), ("D", D)):
-            try:
-                arrays[name] = np.asarray(value, dtype=float)
-            except (TypeError, ValueError):
-                raise ValueError(f"{name} must be a real matrix, got {value!r}") from None
+            arrays[name] = _real_array(name, value, "a real matrix")
             require(bool(np.all(np.isfinite(arrays[name]))), name, value, "finite (no NaN or inf)")
         a = arrays["A"].reshape(0, 0) if arrays["A"].size == 0 else np.atleast_2d(arrays["A"])
         require(a.ndim == 2 and a.shape[0] == a.shape[1], "A", A, "square")
@@ -396,6 +448,7 @@ class Controller:
             Whole-sample computation delay (not part of the continuous design).
         """
         real("fs", fs, "Hz", positive=True)
+        integer("delay", delay, 0)
         n, d = _proper_pair(num, den, "continuous transfer function")
         return cls._raw("continuous", _discretise(n, d, float(fs), method, prewarp), fs, delay, (n, d))
 
@@ -468,11 +521,14 @@ class Controller:
         """``(num, den)`` in z, highest power first, ``den[0] = 1``, equal lengths, delay included
         (a delay of d multiplies den by z^d)."""
         A, B, C, D = self.to_ss()
-        if self.order == 0:
-            num, den = np.array([self._d]), np.ones(1)
-        else:
-            num2, den = signal.ss2tf(A, B, C, D)
-            num = np.atleast_2d(num2)[0]
+        # den = det(zI - A); num = den * (D + C B z^-1 + C A B z^-2 + ...) truncated: the Markov parameters
+        # keep exact zeros exact (a strictly proper controller's leading coefficients), unlike ss2tf.
+        den = np.real(np.poly(A)) if self.order else np.ones(1)
+        markov, x = [D[0, 0]], B[:, 0]
+        for _ in range(self.order):
+            markov.append(float(C[0] @ x))
+            x = A @ x
+        num = np.convolve(den, markov)[: self.order + 1]
         den = np.concatenate([den, np.zeros(self.delay)])
         return np.concatenate([np.zeros(den.size - num.size), num]), den
 
@@ -643,15 +699,14 @@ def series(*blocks: Controller) -> Controller:
         ss = _series_ss(ss, part.to_ss())
     continuous = None
     if all(p._continuous is not None for p in parts):
-        num, den = np.ones(1), np.ones(1)
+        num: np.ndarray = np.ones(1)
+        den: np.ndarray = np.ones(1)
         for p in parts:
             assert p._continuous is not None
             num, den = np.polymul(num, p._continuous[0]), np.polymul(den, p._continuous[1])
         continuous = (num, den)
     require(ss[0].shape[0] <= MAX_ORDER, "order", ss[0].shape[0], f"<= {MAX_ORDER} for the series")
-    return Controller._make(
-        ss, fs, sum(p.delay for p in parts), continuous=continuous, kind="series", parts=parts
-    )
+    return Controller._make(ss, fs, sum(p.delay for p in parts), continuous=continuous, kind="series", parts=parts)
 
 
 def parallel(*blocks: Controller) -> Controller:
@@ -674,7 +729,8 @@ def parallel(*blocks: Controller) -> Controller:
     assert ss is not None
     continuous = None
     if all(p._continuous is not None for p in parts):
-        num, den = np.zeros(1), np.ones(1)
+        num = np.zeros(1)
+        den = np.ones(1)
         for p in parts:
             assert p._continuous is not None
             pn, pd = p._continuous
