@@ -729,8 +729,8 @@ def parallel(*blocks: Controller) -> Controller:
     assert ss is not None
     continuous = None
     if all(p._continuous is not None for p in parts):
-        num = np.zeros(1)
-        den = np.ones(1)
+        num: np.ndarray = np.zeros(1)
+        den: np.ndarray = np.ones(1)
         for p in parts:
             assert p._continuous is not None
             pn, pd = p._continuous
