@@ -506,7 +506,7 @@ def test_controller_file_suffix(tmp_path) -> None:  # noqa: ANN001
 
 def test_typical_controller_reads_as_documented() -> None:
     c = pid_controller(af.PID.paper()) * notch(700.0) * low_pass(1500.0, order=2)
-    assert c.order == 7 and c.delay == 0 and c.fs == FS
+    assert c.order == 6 and c.delay == 0 and c.fs == FS
     num, den = c.to_tf()
     _, h = signal.freqz(num, den, worN=F, fs=FS)
     close(c.response(F), h, 1e-9)

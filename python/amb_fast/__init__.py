@@ -31,6 +31,18 @@ from ._params import PID, Rig
 from ._recording import Recording, load_recording, save_recording
 from ._simulate import Trace, simulate
 from ._sweep import SweepResult, load_sweep, sweep
+from .controllers import (
+    Controller,
+    gain,
+    lead_lag,
+    load_controller,
+    low_pass,
+    notch,
+    parallel,
+    pure_delay,
+    second_order,
+    series,
+)
 
 _PLOTS = ("plot_actual", "plot_coefficients", "plot_effective", "plot_estimate", "plot_family")
 
@@ -50,6 +62,16 @@ except PackageNotFoundError:  # pragma: no cover
 
 __all__ = [
     "PID",
+    "Controller",
+    "gain",
+    "lead_lag",
+    "load_controller",
+    "low_pass",
+    "notch",
+    "parallel",
+    "pure_delay",
+    "second_order",
+    "series",
     "Estimate",
     "Multisine",
     "Recording",
