@@ -23,7 +23,7 @@ Matrices = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 # Leaves are rebuilt by kind: kind -> function(controller, **new local params) -> Controller. Kept in a
 # module-level table (not closures) so that a Controller pickles and can go to a process pool or dask.
 _REBUILDERS: dict[str, Callable[..., Controller]] = {}
-# Kinds whose parameters are not prefixed (the PID), and kinds whose single parameter is "gain".
+# Kinds whose single parameter is "gain" (numbered together: gain, gain2, ...), and the raw representations.
 _GAIN_KINDS = ("gain", "tf", "zpk", "ss", "sos", "continuous")
 _RAW_KINDS = ("tf", "zpk", "ss", "sos", "continuous")
 
@@ -255,10 +255,10 @@ class Controller:
     integrator) are allowed.
 
     Realisation: from a transfer function, zeros/poles/gain or second-order sections the state space
-    is a series of first- and second-order sections (conjugate pole pairs, each with its nearest zeros),
-    each in controllable canonical form, never the companion form of a high-order polynomial; a state space given to
-    :meth:`from_ss` is kept as it is. A series stacks the parts' states block-triangularly, a parallel
-    block-diagonally.
+    is a series of first- and second-order sections (conjugate pole pairs, each with its nearest
+    zeros), each in controllable canonical form, never the companion form of a high-order polynomial;
+    a state space given to :meth:`from_ss` is kept as it is. A series stacks the parts' states
+    block-triangularly, a parallel block-diagonally (a branch's extra delay as a shift register).
 
     Parameters for sweeps (:attr:`params`, :meth:`with_params`), named by this rule:
 
