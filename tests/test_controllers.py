@@ -265,7 +265,11 @@ def test_combinations_multiply_and_add() -> None:
     close((n - lp).response(F), n.response(F) - lp.response(F), 1e-12)
     close((-n + 1.0).response(F), 1.0 - n.response(F), 1e-12)
     close((pid + n).continuous_response(F), pid.continuous_response(F) + n.continuous_response(F), 1e-12)
-    d = pure_delay(3) * n
+    for combo in (c, p, g, d := pure_delay(3) * n):
+        num, den = combo.to_tf()  # round trip through the polynomials, delays included
+        close(Controller.from_tf(num, den, FS).response(F), combo.response(F), 1e-9)
+    assert sum([n, lp]) == n + lp and 0 + n == n
+    close((np.float64(2.0) * n).response(F), 2.0 * n.response(F), 1e-12)
     close(d.response(F), n.response(F) * zi**3, 1e-12)
     assert d.order == 2 and d.delay == 3
 
@@ -445,7 +449,10 @@ value = 0.5
 
 
 def _as_json(tmp_path, text: str) -> object:  # noqa: ANN001
-    import tomllib
+    try:
+        import tomllib
+    except ImportError:  # Python < 3.11
+        tomllib = pytest.importorskip("tomli")
 
     path = tmp_path / "c.json"
     path.write_text(json.dumps(tomllib.loads(text)))

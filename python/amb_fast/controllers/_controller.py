@@ -23,7 +23,7 @@ Matrices = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 # Leaves are rebuilt by kind: kind -> function(controller, **new local params) -> Controller. Kept in a
 # module-level table (not closures) so that a Controller pickles and can go to a process pool or dask.
 _REBUILDERS: dict[str, Callable[..., Controller]] = {}
-# Kinds whose parameters are not prefixed (the PID), and kinds whose single parameter is "gain".
+# Kinds whose single parameter is "gain" (numbered together: gain, gain2, ...), and the raw representations.
 _GAIN_KINDS = ("gain", "tf", "zpk", "ss", "sos", "continuous")
 _RAW_KINDS = ("tf", "zpk", "ss", "sos", "continuous")
 
@@ -65,7 +65,10 @@ def _proper_pair(num: ArrayLike, den: ArrayLike, what: str) -> tuple[np.ndarray,
         num,
         f"of degree <= that of den (degree {d.size - 1}): a {what} of higher numerator degree is improper (non-causal)",
     )
-    require(d.size - 1 <= MAX_ORDER, "den", den, f"of degree <= {MAX_ORDER} (the largest controller order)")
+    if d.size - 1 > MAX_ORDER:
+        raise ValueError(
+            f"den must be of degree <= {MAX_ORDER} (the largest controller order), got degree {d.size - 1}"
+        )
     return n, d
 
 
@@ -252,10 +255,10 @@ class Controller:
     integrator) are allowed.
 
     Realisation: from a transfer function, zeros/poles/gain or second-order sections the state space
-    is a series of first- and second-order sections (conjugate pole pairs, each with its nearest zeros),
-    each in controllable canonical form, never the companion form of a high-order polynomial; a state space given to
-    :meth:`from_ss` is kept as it is. A series stacks the parts' states block-triangularly, a parallel
-    block-diagonally.
+    is a series of first- and second-order sections (conjugate pole pairs, each with its nearest
+    zeros), each in controllable canonical form, never the companion form of a high-order polynomial;
+    a state space given to :meth:`from_ss` is kept as it is. A series stacks the parts' states
+    block-triangularly, a parallel block-diagonally (a branch's extra delay as a shift register).
 
     Parameters for sweeps (:attr:`params`, :meth:`with_params`), named by this rule:
 
@@ -289,6 +292,8 @@ class Controller:
     _local: tuple[tuple[str, float], ...] = ()
     _parts: tuple[Controller, ...] = ()
     _fixed: tuple[Any, ...] = field(default=(), repr=False)
+
+    __array_ufunc__ = None  # numpy scalars and arrays defer to the operators below (2.0 * c, np.float64(2) * c)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "fs", real("fs", self.fs, "Hz", positive=True))
@@ -371,7 +376,8 @@ class Controller:
             require(roots.ndim == 1 and bool(np.all(np.isfinite(roots))), name, given, "a 1-D sequence of finite roots")
             _conjugate_pairs(name, roots, given)
         require(zeros.size <= poles.size, "z", z, f"no more zeros than poles ({poles.size}): otherwise non-causal")
-        require(poles.size <= MAX_ORDER, "p", p, f"at most {MAX_ORDER} poles (the largest controller order)")
+        if poles.size > MAX_ORDER:
+            raise ValueError(f"p must be at most {MAX_ORDER} poles (the largest controller order), got {poles.size}")
         gain = real("k", k, "gain")
         return cls._raw("zpk", _zpk_ss(zeros, poles, gain), fs, delay)
 
@@ -393,7 +399,8 @@ class Controller:
         causal = all(k < 3 and not np.any(row[:k]) for k, row in zip(lead, array))
         require(causal, "sos", sos, "causal in every section: a0 != 0, or b0 = a0 = 0 for a first-order one")
         ss = _sections_ss([(row[:3], row[3:]) for row in array])
-        require(ss[0].shape[0] <= MAX_ORDER, "sos", sos, f"of total order <= {MAX_ORDER}, got {ss[0].shape[0]}")
+        if ss[0].shape[0] > MAX_ORDER:
+            raise ValueError(f"sos must be of total order <= {MAX_ORDER}, got order {ss[0].shape[0]}")
         return cls._raw("sos", ss, fs, delay)
 
     @classmethod
@@ -409,7 +416,8 @@ class Controller:
         a = arrays["A"].reshape(0, 0) if arrays["A"].size == 0 else np.atleast_2d(arrays["A"])
         require(a.ndim == 2 and a.shape[0] == a.shape[1], "A", A, "square")
         n = a.shape[0]
-        require(n <= MAX_ORDER, "A", A, f"of order <= {MAX_ORDER}, got {n}")
+        if n > MAX_ORDER:
+            raise ValueError(f"A must be of order <= {MAX_ORDER} (the largest controller order), got order {n}")
         b, c, d = arrays["B"], arrays["C"], arrays["D"]
         b = b.reshape(n, 1) if b.ndim == 1 and b.size == n else b.reshape(0, 1) if n == 0 else b
         c = c.reshape(1, n) if c.ndim == 1 and c.size == n else c.reshape(1, 0) if n == 0 else c
@@ -636,11 +644,15 @@ class Controller:
     def __add__(self, other: Any) -> Controller:
         if isinstance(other, Controller):
             return parallel(self, other)
+        if isinstance(other, Real) and not isinstance(other, bool) and other == 0:
+            return self  # so that sum(controllers) works
         if isinstance(other, Real) and not isinstance(other, bool):
             return parallel(self, gain(float(other), self.fs))
         return NotImplemented
 
     def __radd__(self, other: Any) -> Controller:
+        if isinstance(other, Real) and not isinstance(other, bool) and other == 0:
+            return self
         if isinstance(other, Real) and not isinstance(other, bool):
             return parallel(gain(float(other), self.fs), self)
         return NotImplemented
