@@ -459,8 +459,11 @@ def controller_response(controller: DesignController, freq: np.ndarray, *, discr
         require(len(controller) == 2, "controller", controller, "a (num, den) pair of polynomial coefficients in s")
         num, den = (np.atleast_1d(np.asarray(p, dtype=float)) for p in controller)
         return np.polyval(num, s) / np.polyval(den, s)
-    require(callable(controller), "controller", controller, "a PID, a (num, den) pair, or a callable of s")
-    return np.asarray(controller(s), dtype=complex) * np.ones_like(s)
+    require(
+        callable(controller), "controller", controller, "a PID, a Controller, a (num, den) pair, or a callable of s"
+    )
+    function: Any = controller
+    return np.asarray(function(s), dtype=complex) * np.ones_like(s)
 
 
 def effective_coefficients(

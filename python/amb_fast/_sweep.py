@@ -288,7 +288,8 @@ def _run_chunk(
         # PID gains only: the closed loop is affine in them, so all radii come in one call.
         assert rig is not None
         radius = spectral_radius(rig, controller, **{name: values[name] for name in names})
-        models = [(rig, replace(controller, **{k: float(values[k][j]) for k in names})) for j in range(n)]  # type: ignore[arg-type]
+        gains: list[dict[str, Any]] = [{k: float(values[k][j]) for k in names} for j in range(n)]
+        models: list[tuple[Rig, AnyController]] = [(rig, replace(controller, **point)) for point in gains]
     else:
         models = [point_model(rig, controller, {k: float(values[k][j]) for k in names}, factory)  # type: ignore[arg-type]
                   for j in range(n)]  # fmt: skip
@@ -380,6 +381,7 @@ def sweep(
     """
     require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
     factory: Factory | None = None
+    base_controller: Any
     if callable(rig) and not isinstance(rig, Rig):
         require(excitation is None, "excitation", excitation, "given once: sweep(factory, excitation, **axes)")
         factory, excitation, base_rig, base_controller = rig, controller, None, None  # type: ignore[assignment]
