@@ -1,3 +1,4 @@
+#include "amb_fast/batch.hpp"
 #include "amb_fast/experiment.hpp"
 #include "bindings.hpp"
 
@@ -32,6 +33,33 @@ void bind_spectrum(py::module_& m) {
         .def_readonly("periods", &LineEstimate::periods)
         .def_readonly("blocks", &LineEstimate::blocks)
         .def_readonly("saturated_samples", &LineEstimate::saturated_samples);
+
+    m.def(
+        "line_spectrum",
+        [](const InputArray& x, const std::vector<Eigen::Index>& bins, const std::string& method) -> py::tuple {
+            if (x.ndim() != 1 && x.ndim() != 2) throw std::invalid_argument("x must be one period or rows of periods");
+            const auto how = method == "fft"      ? LineTransform::Method::fft
+                             : method == "direct" ? LineTransform::Method::direct
+                             : method == "auto"   ? LineTransform::Method::automatic
+                                                  : throw std::invalid_argument("method must be auto, fft or direct");
+            const Eigen::Index rows = x.ndim() == 1 ? 1 : static_cast<Eigen::Index>(x.shape(0));
+            const auto L = static_cast<Eigen::Index>(x.shape(x.ndim() - 1));
+            const auto n = static_cast<Eigen::Index>(bins.size());
+            RowMatrixXcd lines(rows, n);
+            auto used = how;
+            {
+                py::gil_scoped_release release;
+                LineTransform transform(L, bins, how);
+                for (Eigen::Index r = 0; r < rows; ++r) transform(x.data() + r * L, lines.row(r).data());
+                used = transform.method();
+            }
+            const char* name = used == LineTransform::Method::fft ? "fft" : "direct";
+            if (x.ndim() == 1) return py::make_tuple(Eigen::VectorXcd(lines.row(0).transpose()), name);
+            return py::make_tuple(lines, name);
+        },
+        py::arg("x"), py::arg("bins"), py::arg("method") = "auto",
+        "The estimator's transform: unscaled DFT bins of one period, or of each row of periods "
+        "(numpy.fft.rfft(x, axis=-1)[..., bins]), and the method used.");
 
     m.def(
         "run_experiment",
