@@ -33,3 +33,8 @@ class UnstableLoopError(ValueError):
     def __init__(self, message: str, poles) -> None:  # noqa: ANN001
         super().__init__(message)
         self.poles = poles
+
+
+class NoExcitationError(ValueError):
+    """The force has no excitation at the chosen lines: zero, constant, or not clearly above the noise
+    floor measured at the unexcited lines. An estimate from it would be ``k = m w^2`` or noise."""

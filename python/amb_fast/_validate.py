@@ -45,3 +45,21 @@ def seed_value(seed: Any) -> int:
     if seed is None:
         return secrets.randbits(64)
     return integer("seed", seed, 0) % 2**64
+
+
+def rig_and_controller(rig: Any, controller: Any, function: str) -> None:
+    """A ``TypeError`` naming the arguments when ``(rig, controller)`` are missing or swapped.
+
+    The controller is a ``PID`` or an :class:`~amb_fast.Controller`.
+    """
+    from ._linear import is_controller
+    from ._params import Rig
+
+    if isinstance(rig, Rig) and is_controller(controller):
+        return
+    if is_controller(rig) and isinstance(controller, Rig):
+        raise TypeError(f"{function}(rig, pid, ...) takes the Rig first and the controller second; got them swapped "
+                        f"({type(rig).__name__}, {type(controller).__name__})")  # fmt: skip
+    if not isinstance(rig, Rig):
+        raise TypeError(f"{function}: rig must be an amb_fast.Rig, got {type(rig).__name__}")
+    raise TypeError(f"{function}: pid must be an amb_fast.PID or Controller, got {type(controller).__name__}")

@@ -1,6 +1,8 @@
 """Figures (matplotlib, the optional extra ``amb_fast[plot]``). Every function returns its Figure.
 
-Frequencies in Hz on log axes, stiffness in kN/m, damping in N s/m, receptance in m/N.
+Frequencies in Hz on log axes, stiffness in kN/m, damping in N s/m on a linear axis (a symmetric-log
+axis would bend the curves at +-its threshold), receptance in m/N on a log axis. Standard errors are
+drawn as shaded bands of +-2 s.e. under the curves, never as bars over them.
 """
 
 from __future__ import annotations
@@ -50,7 +52,6 @@ def plot_coefficients(
         axes[1].plot(freq, raw[1], ".", ms=3, color="0.6", label="raw")
     axes[0].plot(freq, k / 1e3, lw=1.5, label="median filtered" if raw is not None else None)
     axes[1].plot(freq, c, lw=1.5)
-    axes[1].set_yscale("symlog", linthresh=100)
     if raw is not None:
         axes[0].legend()
     _coefficient_axes(axes)
@@ -70,8 +71,47 @@ def plot_actual(estimate: Estimate, *, title: str = "Actual stiffness and dampin
                              raw=(estimate.k, estimate.c))  # fmt: skip
 
 
-def plot_family(result: SweepResult, name: str, *, zoom: tuple[float, float] | None = None) -> Figure:
-    """Paper Figs. 6-10: k, c and |Y/F| for one gain family; ``zoom`` (Hz) narrows to a band, linear axes."""
+def plot_overlay(
+    estimate: Estimate, k_eff: np.ndarray, c_eff: np.ndarray, *, title: str = "Effective (eq. 5) and actual (eq. 9)"
+) -> Figure:
+    """Effective and actual stiffness and damping in one figure: the actual ones median filtered, over a
+    +-2 s.e. band of the raw estimate; ``k_eff``, ``c_eff`` at ``estimate.freq`` (N/m, N s/m)."""
+    fig, axes = _figure(2)
+    f = estimate.freq
+    for ax, actual, std, effective, scale in ((axes[0], estimate.k_smooth, estimate.k_std, k_eff, 1e3),
+                                              (axes[1], estimate.c_smooth, estimate.c_std, c_eff, 1.0)):  # fmt: skip
+        raw = estimate.k if scale == 1e3 else estimate.c
+        ax.fill_between(f, (raw - 2 * std) / scale, (raw + 2 * std) / scale, color="C0", alpha=0.2, lw=0,
+                        label="actual, raw +-2 s.e.")  # fmt: skip
+        ax.plot(f, actual / scale, color="C0", lw=1.5, label="actual (median filtered)")
+        ax.plot(f, np.asarray(effective) / scale, color="C3", lw=1.5, ls="--", label="effective")
+    axes[0].legend(fontsize=8)
+    _coefficient_axes(axes)
+    axes[0].set_title(title)
+    fig.tight_layout()
+    return fig
+
+
+def _inset(ax, freq: np.ndarray, curves: list[tuple[np.ndarray, str]], zoom: tuple[float, float]) -> None:  # noqa: ANN001
+    band = (freq >= zoom[0]) & (freq <= zoom[1])
+    inner = ax.inset_axes((0.62, 0.08, 0.35, 0.45))
+    for values, label in curves:
+        inner.plot(freq[band], values[band], lw=1.0, label=label)
+    inner.tick_params(labelsize=6)
+    inner.set_title(f"{zoom[0]:.0f}-{zoom[1]:.0f} Hz", fontsize=7)
+    ax.indicate_inset_zoom(inner, edgecolor="0.5")
+
+
+def plot_family(
+    result: SweepResult,
+    name: str,
+    *,
+    zoom: tuple[float, float] | None = None,
+    inset: tuple[float, float] | None = None,
+) -> Figure:
+    """Paper Figs. 6-10: k, c and |Y/F| for one gain family; ``zoom`` (Hz) narrows to a band, linear axes;
+    ``inset`` (Hz) adds a zoomed inset of that band to the stiffness and receptance panels (where the paper
+    zooms: Figs. 7 and 9)."""
     symbol, unit = LABELS[name]
     fig, axes = _figure(3, height=2.6)
     freq = result.freq
@@ -84,11 +124,14 @@ def plot_family(result: SweepResult, name: str, *, zoom: tuple[float, float] | N
     axes[2].set_ylabel("|Y/F| (m/N)")
     _coefficient_axes(axes)
     if zoom is None:
-        axes[1].set_yscale("symlog", linthresh=100)
         axes[2].set_yscale("log")
     else:
         for ax in axes:
             ax.set_xscale("linear")
+    if inset is not None and zoom is None:
+        rows = range(len(result.points[name]))
+        _inset(axes[0], freq, [(result.k_smooth[r] / 1e3, "") for r in rows], inset)
+        _inset(axes[2], freq, [(np.abs(1 / result.H[r]), "") for r in rows], inset)
     axes[0].legend(fontsize=8)
     where = "" if zoom is None else f", {zoom[0]:.0f}-{zoom[1]:.0f} Hz"
     axes[0].set_title(f"Varying {symbol}{where}")
@@ -97,16 +140,17 @@ def plot_family(result: SweepResult, name: str, *, zoom: tuple[float, float] | N
 
 
 def plot_estimate(estimate: Estimate, *, title: str = "Identified stiffness, damping and receptance") -> Figure:
-    """One estimate: k and c with their standard errors, and |Y/F|."""
+    """One estimate: k and c (raw dots over a +-2 s.e. band, the median-filtered line on top), and |Y/F|.
+    Weak lines (``Estimate.weak``) are marked with a cross."""
     fig, axes = _figure(3, height=2.6)
     f = estimate.freq
-    axes[0].errorbar(
-        f, estimate.k / 1e3, yerr=2 * estimate.k_std / 1e3, fmt=".", ms=3, color="0.5", label="raw, 2 s.e."
-    )
-    axes[0].plot(f, estimate.k_smooth / 1e3, label="median filtered")
-    axes[1].errorbar(f, estimate.c, yerr=2 * estimate.c_std, fmt=".", ms=3, color="0.5")
-    axes[1].plot(f, estimate.c_smooth)
-    axes[1].set_yscale("symlog", linthresh=100)
+    for ax, raw, std, smooth, scale in ((axes[0], estimate.k, estimate.k_std, estimate.k_smooth, 1e3),
+                                        (axes[1], estimate.c, estimate.c_std, estimate.c_smooth, 1.0)):  # fmt: skip
+        ax.fill_between(f, (raw - 2 * std) / scale, (raw + 2 * std) / scale, color="0.8", lw=0, label="raw +-2 s.e.")
+        ax.plot(f, raw / scale, ".", ms=3, color="0.45", label="raw")
+        ax.plot(f, smooth / scale, color="C0", lw=1.5, label="median filtered")
+        if estimate.weak is not None and estimate.weak.any():
+            ax.plot(f[estimate.weak], raw[estimate.weak] / scale, "x", color="C3", ms=5, label="weak line")
     axes[2].plot(f, np.abs(estimate.receptance))
     axes[2].set_yscale("log")
     axes[2].set_ylabel("|Y/F| (m/N)")

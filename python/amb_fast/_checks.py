@@ -1,0 +1,142 @@
+"""Refuse or warn, never guess: checks of an identification against what the recording itself shows.
+
+- No excitation at the chosen lines (zero, constant or pure-noise force): an error.
+- Lines whose force or displacement is under ``WEAK`` times the unexcited level: flagged (``Estimate.weak``).
+- The first periods differing from the last beyond the period-to-period scatter (a start transient kept): a warning.
+- Implausible magnitudes (stiffness outside 1e2-1e9 N/m, a displacement above 10 mm or the clearance,
+  force and displacement swapped): warnings that name the likely unit mistake.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from ._errors import NoExcitationError
+
+WEAK = 10.0  # a line is weak under this many times the unexcited level
+EXCITED = 3.0  # the excited lines as a whole must be this far above the unexcited level
+TRANSIENT = 4.0  # first-vs-last difference over the consecutive-period scatter that warns
+STIFFNESS = (1e2, 1e9)  # N/m
+DISPLACEMENT = 10e-3  # m
+
+
+def floor(levels: np.ndarray) -> float | None:
+    """The noise floor from the unexcited lines' levels (their median); ``None`` without any."""
+    levels = np.asarray(levels, dtype=float)
+    levels = levels[np.isfinite(levels)]
+    return float(np.median(levels)) if levels.size else None
+
+
+def require_excitation(
+    force_lines: np.ndarray, unexcited_force: np.ndarray, offset: float = 0.0, where: str = ""
+) -> None:
+    """Raise :class:`NoExcitationError` unless the excited lines' force is clearly above the unexcited level.
+
+    ``offset`` (N) is a sample of the force: lines under 1e-9 of it are rounding, not excitation (a
+    constant force)."""
+    level = float(np.median(np.abs(force_lines))) if force_lines.size else 0.0
+    noise = floor(unexcited_force)
+    if level <= 1e-9 * abs(offset) or not np.isfinite(level):
+        raise NoExcitationError(f"force has no excitation at the chosen lines{where}: it is zero or constant there "
+                                f"({offset:g} N)")  # fmt: skip
+    if noise is not None and level <= EXCITED * noise:
+        raise NoExcitationError(
+            f"force has no excitation at the chosen lines{where}: their median level {level:.3g} N is not clearly "
+            f"above the noise floor {noise:.3g} N (unexcited lines, or the period-to-period scatter; needs > "
+            f"{EXCITED:g}x); pure noise, or the wrong lines (pass lines= or f_max=)"
+        )
+
+
+SAMPLE_PERIODS = 16  # periods the checks read (the averaged estimate reads all of them)
+
+
+def noise_levels(signal: np.ndarray, period: int, harmonics: np.ndarray, unexcited: np.ndarray) -> np.ndarray:
+    """Levels of one channel that show its noise in the average of all its periods.
+
+    The unexcited lines; with none, the harmonics above the band; with every harmonic excited, the
+    period-to-period scatter at the lines. The last two are measured on at most SAMPLE_PERIODS periods
+    (spread over the record) and scaled by sqrt(used / all), as noise averages down, so the check costs
+    a few periods, not a pass over the record.
+    """
+    if unexcited.size:
+        return unexcited
+    periods = signal.reshape(-1, period)
+    total = periods.shape[0]
+    pick = periods[np.unique(np.linspace(0, total - 1, min(total, SAMPLE_PERIODS)).astype(int))]
+    scale = np.sqrt(pick.shape[0] / total)
+    top = int(harmonics.max())
+    if top < period // 2 - 1:
+        return np.abs(np.fft.rfft(pick.mean(axis=0)))[top + 1 : period // 2] * (2.0 / period) * scale
+    spectra = np.fft.rfft(pick, axis=1)[:, harmonics] * (2.0 / period)
+    return np.std(spectra, axis=0, ddof=1) / np.sqrt(total)
+
+
+def weak_lines(force: np.ndarray, displacement: np.ndarray, unexcited_force: np.ndarray,
+               unexcited_displacement: np.ndarray) -> np.ndarray:  # fmt: skip
+    """Per excited line: force or displacement under WEAK times the unexcited level (False without unexcited lines)."""
+    weak = np.zeros(np.shape(force), dtype=bool)
+    for values, levels in ((force, unexcited_force), (displacement, unexcited_displacement)):
+        noise = floor(levels)
+        if noise is not None and noise > 0:
+            weak |= np.abs(values) < WEAK * noise
+    return weak
+
+
+def detect_lines(level: np.ndarray) -> np.ndarray:
+    """Harmonic numbers (1-based) that carry excitation: above 1e-3 of the largest and above WEAK times the
+    median of all harmonics (the noise floor while fewer than half the harmonics are excited)."""
+    if level.size == 0 or level.max() <= 0:
+        return np.zeros(0, dtype=np.int64)
+    keep = (level > 1e-3 * level.max()) & (level > WEAK * np.median(level))
+    return np.flatnonzero(keep) + 1
+
+
+def warn_transient(displacement: np.ndarray, period: int, stacklevel: int = 3) -> None:
+    """Warn when the first recorded period differs from the last beyond the consecutive-period scatter."""
+    periods = displacement.size // period
+    if periods < 4:
+        return
+    p = displacement[: periods * period].reshape(periods, period)
+    last = p[-1]
+    with np.errstate(over="ignore", invalid="ignore"):  # a diverged record: the other checks say so
+        difference = float(np.sqrt(np.mean((p[0] - last) ** 2)))
+        later = np.unique(np.linspace(periods // 2, periods - 2, 8).astype(int))  # a few pairs in the second half
+        scatter = float(np.median([np.sqrt(np.mean((p[i] - p[i + 1]) ** 2)) for i in later]))
+        size = float(np.sqrt(np.mean((last - last.mean()) ** 2)))
+    if difference > TRANSIENT * scatter and difference > 1e-4 * size:
+        warnings.warn(
+            f"the first period differs from the last by {difference:.3g} m rms, {difference / max(scatter, 1e-300):.3g}"
+            " times the period-to-period scatter: a start transient (or a drift) is in the estimate; skip it with "
+            "settle_periods=",
+            stacklevel=stacklevel,
+        )
+
+
+def warn_implausible(
+    k: np.ndarray, H: np.ndarray, displacement: np.ndarray, clearance: float | None, stacklevel: int = 3
+) -> None:
+    """Warnings for magnitudes that point to a unit mistake or swapped channels."""
+    stiffness = float(np.median(np.abs(k)))
+    dynamic = float(np.median(np.abs(H)))
+    if dynamic < 1.0:
+        warnings.warn(
+            f"the median |F/Y| is {dynamic:.3g} N/m: force and displacement look swapped (or not in N and m)",
+            stacklevel=stacklevel,
+        )
+    elif not STIFFNESS[0] <= stiffness <= STIFFNESS[1]:
+        warnings.warn(
+            f"the median stiffness {stiffness:.3g} N/m is outside {STIFFNESS[0]:g}-{STIFFNESS[1]:g} N/m: check the "
+            "units of force (N) and displacement (m)",
+            stacklevel=stacklevel,
+        )
+    amplitude = 0.5 * float(np.ptp(displacement)) if displacement.size else 0.0  # a few periods suffice
+    limit = DISPLACEMENT if clearance is None else clearance
+    if amplitude > limit:
+        what = f"the clearance {clearance:g} m" if clearance is not None else f"{DISPLACEMENT * 1e3:g} mm"
+        warnings.warn(
+            f"the displacement amplitude {amplitude:.3g} m is above {what}: is the displacement in mm or um "
+            "instead of m? (load_recording scales a unit in the column name)",
+            stacklevel=stacklevel,
+        )

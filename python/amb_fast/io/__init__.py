@@ -1,0 +1,31 @@
+"""Files in and out.
+
+- Readers for what rigs write (``_recording``): CSV/TSV/``;`` dialects with quoted headers, a units row
+  and decimal commas; MATLAB v4-v7 (scipy) and v7.3 (HDF5, h5py), dSPACE ControlDesk/TRACE exports with
+  several recordings; NI TDMS (npTDMS). Channels by name or index, units scaled to SI or refused; text
+  read in chunks keeping only the chosen columns.
+- Writers (``_results``): estimates as CSV with a metadata header or NetCDF, xarray and pandas views,
+  SHA-256 checksums (and HDF5 fletcher32) checked on load.
+- The atomic-write helper (``_atomic``): a temporary file in the same directory, fsync, ``os.replace``.
+"""
+
+from __future__ import annotations
+
+from ._atomic import atomic_path, atomic_text, atomic_write
+from ._recording import Recording, load_recording, save_recording, sniff, split_unit
+from ._results import load_estimate, read_netcdf, save_estimate, write_netcdf
+
+__all__ = [
+    "Recording",
+    "atomic_path",
+    "atomic_text",
+    "atomic_write",
+    "load_estimate",
+    "load_recording",
+    "read_netcdf",
+    "save_estimate",
+    "save_recording",
+    "sniff",
+    "split_unit",
+    "write_netcdf",
+]

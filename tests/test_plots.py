@@ -1,0 +1,49 @@
+"""Figures: linear damping axes, effective and actual overlaid with error bands, insets where the paper zooms."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import amb_fast as af
+
+pytest.importorskip("matplotlib")
+
+
+@pytest.fixture(scope="module")
+def estimate() -> af.Estimate:
+    rig = af.Rig(sensor_noise=1e-8, force_noise=1e-3)
+    return af.run_experiment(rig, af.PID.paper(), af.schroeder_multisine(f_max=100.0), periods=4, seed=2)
+
+
+def test_damping_axes_are_linear_and_error_bands_lie_under_the_lines(estimate) -> None:
+    from matplotlib.collections import PolyCollection
+
+    for fig in (af.plot_actual(estimate), af.plot_estimate(estimate)):
+        assert fig.axes[1].get_ylabel() == "damping c (N s/m)" and fig.axes[1].get_yscale() == "linear"
+    fig = af.plot_estimate(estimate)
+    for ax in fig.axes[:2]:
+        assert not ax.containers  # no error bars drawn over the curve
+        bands = [c for c in ax.collections if isinstance(c, PolyCollection)]
+        assert len(bands) == 1 and bands[0].get_zorder() <= min(line.get_zorder() for line in ax.lines)
+
+
+def test_effective_and_actual_in_one_figure(estimate) -> None:
+    k_eff, c_eff = af.effective_coefficients(af.Rig(), af.PID.paper(), estimate.freq)
+    fig = af.plot_overlay(estimate, k_eff, c_eff)
+    for ax, effective in zip(fig.axes, (k_eff / 1e3, c_eff)):
+        labels = [line.get_label() for line in ax.lines]
+        assert labels == ["actual (median filtered)", "effective"]
+        np.testing.assert_array_equal(ax.lines[1].get_ydata(), effective)
+        assert len(ax.collections) == 1  # the +-2 s.e. band of the actual estimate
+
+
+def test_family_figures_get_a_zoomed_inset() -> None:
+    result = af.sweep(af.Rig(), af.PID.paper(), af.schroeder_multisine(f_max=100.0), kd=[2.0, 3.0], periods=2)
+    plain = af.plot_family(result, "kd")
+    zoomed = af.plot_family(result, "kd", inset=(30.0, 50.0))
+    assert [len(ax.child_axes) for ax in zoomed.axes] == [1, 0, 1]  # stiffness and receptance panels
+    assert [len(ax.child_axes) for ax in plain.axes] == [0, 0, 0]
+    inset = zoomed.axes[0].child_axes[0]
+    assert inset.get_title() == "30-50 Hz" and inset.get_xscale() == "linear"
+    assert zoomed.axes[1].get_yscale() == "linear"
