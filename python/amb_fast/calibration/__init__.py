@@ -1,0 +1,16 @@
+"""Calibration and design on a calibrated virtual rig.
+
+:func:`fit_rig` fits the exact sampled-data model (:func:`amb_fast.predict`) to measured estimates and
+returns a :class:`RigFit`: the fitted :class:`~amb_fast.Rig`, its parameters' covariance, a goodness of
+fit that accounts for standard errors estimated from few periods, and predictions with error bars for
+controllers never tried on the rig. :func:`design_controller` chooses controller parameters so that the
+*actual* stiffness and damping (lags included) meet targets, with a stability and sensitivity limit.
+``docs/calibration.md`` is the user's guide.
+"""
+
+from __future__ import annotations
+
+from ._design import Design, design_controller
+from ._fit import RigFit, fit_rig
+
+__all__ = ["Design", "RigFit", "design_controller", "fit_rig"]

@@ -1,0 +1,367 @@
+"""Controller design for the actual stiffness and damping: :func:`design_controller`."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy import optimize
+
+from .._linear import (
+    AnyController,
+    closed_loop_poles,
+    effective_coefficients,
+    is_controller,
+    iso_zone,
+    predict,
+    sensitivity,
+    stability_margin,
+)
+from .._params import PID, Rig
+from .._sweep import RIG_FIELDS, point_model, unit_of
+
+GAINS = ("kp", "ki", "kd")
+_GRID_POINTS = 1500  # sensitivity grid of the constraint during the search (the result is checked on 20000)
+
+
+@dataclass(frozen=True)
+class Design:
+    """A controller designed by :func:`design_controller`.
+
+    Attributes
+    ----------
+    controller : PID or Controller
+        The designed controller (the start controller with the free parameters replaced).
+    params, start : dict of str to float
+        The free parameters' designed and start values (units: A/m, A/(m s), A s/m, Hz, ...).
+    freq : ndarray
+        Design frequencies, Hz.
+    k_target, c_target : ndarray or None
+        Targets, N/m and N s/m (``None``: not part of the design).
+    k, c : ndarray
+        Actual stiffness (N/m) and damping (N s/m) the design gives on the rig (:func:`amb_fast.predict`:
+        every lag, the mass loading and the transducer included), as an estimate would measure them.
+    k_effective, c_effective : ndarray
+        The controller's effective coefficients (paper eq. 5), N/m and N s/m.
+    peak_sensitivity : float
+        max |S| (``inf`` if unstable); ``stable``: whether the loop is stable.
+    residual : float
+        Root mean square of the weighted relative misses (the objective; 0 when the targets are met).
+    k_miss, c_miss : float
+        Root mean square of ``k - k_target`` (N/m) and ``c - c_target`` (N s/m); NaN without a target.
+    constrained : bool
+        Whether a limit (stability or ``max_sensitivity``) kept the design from the unconstrained optimum.
+    unconstrained_residual : float
+        The objective at the unconstrained optimum (equal to ``residual`` when not constrained).
+    exact : bool
+        Whether the unconstrained optimum came from an exact linear least-squares solve (F/Y affine in the
+        free parameters: PID gains).
+    basis : {"actual", "effective"}
+        What was matched to the targets.
+    """
+
+    controller: AnyController
+    params: dict[str, float]
+    start: dict[str, float]
+    freq: np.ndarray
+    k_target: np.ndarray | None
+    c_target: np.ndarray | None
+    k: np.ndarray
+    c: np.ndarray
+    k_effective: np.ndarray
+    c_effective: np.ndarray
+    peak_sensitivity: float
+    stable: bool
+    residual: float
+    k_miss: float
+    c_miss: float
+    constrained: bool
+    unconstrained_residual: float
+    exact: bool
+    basis: str
+    max_sensitivity: float | None = None
+
+    def report(self) -> str:
+        """Parameters (start and designed), the targets against the actual and effective coefficients at a
+        few frequencies, how far the design misses, and its sensitivity peak."""
+        out = [f"Controller designed for the {self.basis} stiffness and damping on "
+               f"{self.freq.min():g}-{self.freq.max():g} Hz ({self.freq.size} frequencies)", "",
+               f"{'parameter':<20} {'start':>12} {'designed':>12}  unit"]  # fmt: skip
+        for n, v in self.params.items():
+            out.append(f"{n:<20} {self.start[n]:12.6g} {v:12.6g}  {unit_of(n)}")
+        out += ["", f"{'f (Hz)':>8} {'k target':>11} {'k actual':>11} {'k eff':>11} "
+                    f"{'c target':>10} {'c actual':>10} {'c eff':>10}"]  # fmt: skip
+        for i in np.unique(np.linspace(0, self.freq.size - 1, min(self.freq.size, 6)).round().astype(int)):
+            kt = f"{self.k_target[i]:11.5g}" if self.k_target is not None else f"{'-':>11}"
+            ct = f"{self.c_target[i]:10.4g}" if self.c_target is not None else f"{'-':>10}"
+            out.append(f"{self.freq[i]:8g} {kt} {self.k[i]:11.5g} {self.k_effective[i]:11.5g} {ct} "
+                       f"{self.c[i]:10.4g} {self.c_effective[i]:10.4g}")  # fmt: skip
+        out.append("(N/m, N s/m; actual: on the rig with its lags; eff: paper eq. 5)")
+        out.append("")
+        for name, miss, target, unit in (("stiffness", self.k_miss, self.k_target, "N/m"),
+                                         ("damping", self.c_miss, self.c_target, "N s/m")):  # fmt: skip
+            if target is not None:
+                scale = float(np.sqrt(np.mean(target**2)))
+                rel = f" ({100 * miss / scale:.3g} % of the target)" if scale > 0 else ""
+                out.append(f"{name:<10} misses by {miss:.4g} {unit} rms{rel}")
+        zone = iso_zone(self.peak_sensitivity) if self.stable else "unstable"
+        limit = f" (limit {self.max_sensitivity:g})" if self.max_sensitivity is not None else ""
+        out.append(f"sensitivity peak |S| = {self.peak_sensitivity:.3f}{limit}, ISO 14839-3 zone {zone}")
+        if self.constrained:
+            out.append(
+                "the targets are not feasible: the unconstrained optimum (objective "
+                f"{self.unconstrained_residual:.4g}) is unstable or over the sensitivity limit; this is the best "
+                f"feasible design (objective {self.residual:.4g})"
+            )
+        elif self.residual > 1e-3:
+            out.append("the targets cannot be met exactly by these parameters: best fit, objective "
+                       f"{self.residual:.4g} (rms weighted relative miss)")  # fmt: skip
+        return "\n".join(out)
+
+
+def _values(controller: AnyController, names: Sequence[str]) -> dict[str, float]:
+    out = {}
+    params = getattr(controller, "params", None)
+    for name in names:
+        if name in RIG_FIELDS:
+            raise ValueError(f"free: {name!r} is a rig field; design_controller chooses controller parameters")
+        if isinstance(controller, PID):
+            if name not in ("kp", "ki", "kd", "derivative_cutoff"):
+                raise ValueError(f"free: {name!r} is not a PID parameter (kp, ki, kd, derivative_cutoff)")
+            value = getattr(controller, name)
+        else:
+            if not isinstance(params, dict) or name not in params:
+                known = ", ".join(params) if isinstance(params, dict) else "none"
+                raise ValueError(f"free: {name!r} is not a parameter of the controller (its params: {known})")
+            value = params[name]
+        if value is None:
+            raise ValueError(f"free: {name!r} is None in the controller; give it a start value there")
+        out[name] = float(value)
+    return out
+
+
+def _target(name: str, value: Any, freq: np.ndarray) -> np.ndarray | None:
+    if value is None:
+        return None
+    array = np.asarray(value, dtype=float)
+    try:
+        array = np.broadcast_to(array, freq.shape).copy()
+    except ValueError:
+        raise ValueError(f"{name} must be a number or an array like freq ({freq.size} values), "
+                         f"got shape {array.shape}") from None  # fmt: skip
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be finite")
+    return array
+
+
+def design_controller(
+    rig: Rig,
+    controller: AnyController,
+    *,
+    freq: ArrayLike,
+    stiffness: ArrayLike | None = None,
+    damping: ArrayLike | None = None,
+    free: Sequence[str] = ("kp", "kd"),
+    max_sensitivity: float | None = None,
+    weights: tuple[ArrayLike, ArrayLike] | None = None,
+    basis: Literal["actual", "effective"] = "actual",
+) -> Design:
+    """Choose controller parameters so that the actual stiffness and damping on ``rig`` meet targets.
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig to design for, ideally a calibrated one (:attr:`RigFit.rig`): its lags, mass loading and
+        transducer decide the actual coefficients.
+    controller : PID or Controller
+        Start controller: the structure, and the values of every parameter not in ``free``.
+    freq : array_like
+        Design frequencies, Hz (below ``fs/2``).
+    stiffness, damping : float or array_like, optional
+        Targets for the actual k(f) (N/m) and c(f) (N s/m) at ``freq``; at least one.
+    free : sequence of str
+        Controller parameters to choose, named as in sweeps (:func:`amb_fast._sweep.point_model`): ``kp``,
+        ``ki``, ``kd``, ``derivative_cutoff`` for a PID, any of ``controller.params`` for a Controller.
+    max_sensitivity : float, optional
+        Upper limit of the sensitivity peak max |S| (ISO 14839-3: 3 for zone A). Stability is always
+        required.
+    weights : (wk, wc), optional
+        Weights (scalars or arrays at ``freq``) of the stiffness and damping misses. The misses are
+        relative: ``(k - k_target) / rms(k_target)``, ``(c - c_target) / rms(c_target)``, times the weights
+        (default 1).
+    basis : {"actual", "effective"}
+        ``"effective"`` matches the effective coefficients of paper eq. 5 instead: the naive design that
+        ignores the lags, for comparison.
+
+    Returns
+    -------
+    Design
+
+    Notes
+    -----
+    ``F/Y = (1 - P_u G z^-d) / P_f`` (times the transducer's response) is affine in the controller's
+    transfer function, so k and c are affine in the PID gains. With only gains free the unconstrained
+    optimum is an exact linear least-squares solve (verified affine numerically); otherwise trust-region
+    least squares from the start values (positive non-gain parameters in log scale). If the optimum is
+    unstable or over ``max_sensitivity``, the design moves from the start controller (which must be
+    feasible) towards it as far as the limits allow, then minimises with the limits as constraints
+    (SLSQP): the best feasible design, and the report says by how much it misses.
+    """
+    if not isinstance(rig, Rig):
+        raise ValueError(f"rig must be an amb_fast.Rig, got {type(rig).__name__}")
+    if not is_controller(controller):
+        raise ValueError(f"controller must be a PID or an amb_fast.Controller, got {type(controller).__name__}")
+    f = np.asarray(freq, dtype=float)
+    if f.ndim != 1 or f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0) or np.any(f >= controller.fs / 2):
+        raise ValueError(f"freq must be a 1-D array of frequencies in (0, {controller.fs / 2:g}) Hz, got {freq!r}")
+    if basis not in ("actual", "effective"):
+        raise ValueError(f"basis must be 'actual' or 'effective', got {basis!r}")
+    k_target, c_target = _target("stiffness", stiffness, f), _target("damping", damping, f)
+    if k_target is None and c_target is None:
+        raise ValueError("stiffness and damping are both None: give at least one target")
+    if isinstance(free, str):
+        free = [n.strip() for n in free.split(",") if n.strip()]
+    names = list(free)
+    if not names or len(set(names)) != len(names):
+        raise ValueError(f"free must name one or more distinct controller parameters, got {free!r}")
+    start = _values(controller, names)
+    if max_sensitivity is not None and not (np.isfinite(max_sensitivity) and max_sensitivity > 1):
+        raise ValueError(f"max_sensitivity must be a number > 1 (|S| peak), got {max_sensitivity!r}")
+    wk: Any = 1.0
+    wc: Any = 1.0
+    if weights is not None:
+        try:
+            wk, wc = weights
+        except (TypeError, ValueError):
+            raise ValueError(f"weights must be a (stiffness weight, damping weight) pair, got {weights!r}") from None
+        wk = _target("weights[0]", wk, f)
+        wc = _target("weights[1]", wc, f)
+    w = 2 * np.pi * f
+    sk = float(np.sqrt(np.mean(k_target**2))) if k_target is not None else 1.0
+    sc = float(np.sqrt(np.mean(c_target**2))) if c_target is not None else 1.0
+    sk, sc = sk or 1.0, sc or 1.0
+
+    # Coordinates: gains (and parameters that may change sign) linear, scaled by their start; other
+    # positive parameters in log scale.
+    logs = np.array([n not in GAINS and start[n] > 0 for n in names])
+    scale = np.array([1.0 if lg else max(abs(start[n]), 1e-12) for n, lg in zip(names, logs)])
+    # A gain that starts at 0 gets the scale of its effect: that of kp's start in the band.
+    x0 = np.array([np.log(start[n]) if lg else 1.0 for n, lg in zip(names, logs)])
+    for i, n in enumerate(names):
+        if not logs[i] and start[n] == 0:
+            scale[i] = _zero_scale(n, start, w)
+            x0[i] = 0.0
+
+    def values(x: np.ndarray) -> dict[str, float]:
+        return {n: float(np.exp(v) if lg else v * s) for n, v, lg, s in zip(names, x, logs, scale)}
+
+    def model(x: np.ndarray) -> tuple[Rig, AnyController]:
+        return point_model(rig, controller, values(x))
+
+    def coefficients(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        r, ctrl = model(x)
+        if basis == "effective":
+            return effective_coefficients(r, ctrl, f)
+        H = 1.0 / predict(r, ctrl, f)
+        return rig.mass * w**2 + H.real, H.imag / w
+
+    def residuals(x: np.ndarray) -> np.ndarray:
+        k, c = coefficients(x)
+        parts = []
+        if k_target is not None:
+            parts.append(wk * (k - k_target) / sk)
+        if c_target is not None:
+            parts.append(wc * (c - c_target) / sc)
+        return np.concatenate(parts)
+
+    def objective(x: np.ndarray) -> float:
+        r = residuals(x)
+        return float(np.sqrt(np.mean(r**2)))
+
+    # Unconstrained optimum: exact when the residuals are affine in x (checked at two other points).
+    r0 = residuals(x0)
+    M = np.column_stack([residuals(x0 + np.eye(len(names))[j]) - r0 for j in range(len(names))])
+    probe = x0 + np.linspace(0.3, -0.2, len(names))
+    exact = not logs.any() and bool(
+        np.linalg.norm(residuals(probe) - (r0 + M @ (probe - x0))) <= 1e-8 * (np.linalg.norm(r0) + np.linalg.norm(M))
+    )
+    if exact:
+        x_star = x0 + np.linalg.lstsq(M, -r0, rcond=None)[0]
+    else:
+        x_star = optimize.least_squares(residuals, x0, method="trf", xtol=1e-12, ftol=1e-12).x
+
+    def radius(x: np.ndarray) -> float:
+        return float(np.max(np.abs(closed_loop_poles(*model(x)))))
+
+    grid = np.geomspace(0.01, controller.fs / 2 * (1 - 1e-9), _GRID_POINTS)
+
+    def peak(x: np.ndarray) -> float:
+        return float(np.max(np.abs(sensitivity(*model(x), grid))))
+
+    def feasible(x: np.ndarray) -> bool:
+        if radius(x) >= 1.0 - 1e-9:
+            return False
+        return max_sensitivity is None or peak(x) <= max_sensitivity
+
+    x_best, constrained = x_star, False
+    if not feasible(x_star):
+        constrained = True
+        if not feasible(x0):
+            raise ValueError(
+                "controller: the targets' optimum is unstable or over max_sensitivity and so is the start "
+                "controller; start from a stable controller within the limit"
+            )
+        lo, hi = 0.0, 1.0  # the furthest feasible point on the segment from the start to the optimum
+        for _ in range(40):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if feasible(x0 + mid * (x_star - x0)) else (lo, mid)
+        x_best = x0 + lo * (x_star - x0)
+        constraints = [{"type": "ineq", "fun": lambda x: 1.0 - 1e-6 - radius(x)}]
+        if max_sensitivity is not None:
+            constraints.append({"type": "ineq", "fun": lambda x: max_sensitivity - peak(x)})
+        result = optimize.minimize(lambda x: float(np.sum(residuals(x) ** 2)), x_best, method="SLSQP",
+                                   constraints=constraints, options={"maxiter": 200, "ftol": 1e-12})  # fmt: skip
+        if np.all(np.isfinite(result.x)) and feasible(result.x) and objective(result.x) < objective(x_best):
+            x_best = result.x
+
+    r_model, designed = model(x_best)
+    k, c = coefficients(x_best)
+    if basis == "effective":  # report the actual coefficients too: k, c are always the actual ones
+        H = 1.0 / predict(r_model, designed, f)
+        k, c = rig.mass * w**2 + H.real, H.imag / w
+    k_eff, c_eff = effective_coefficients(r_model, designed, f)
+    margin = stability_margin(r_model, designed)
+    if max_sensitivity is not None and margin.peak > max_sensitivity * (1 + 1e-3):
+        constrained = True
+    return Design(
+        controller=designed,
+        params=values(x_best),
+        start=start,
+        freq=f,
+        k_target=k_target,
+        c_target=c_target,
+        k=k,
+        c=c,
+        k_effective=k_eff,
+        c_effective=c_eff,
+        peak_sensitivity=float(margin.peak),
+        stable=bool(margin.stable),
+        residual=objective(x_best),
+        k_miss=float(np.sqrt(np.mean((k - k_target) ** 2))) if k_target is not None else float("nan"),
+        c_miss=float(np.sqrt(np.mean((c - c_target) ** 2))) if c_target is not None else float("nan"),
+        constrained=constrained,
+        unconstrained_residual=objective(x_star),
+        exact=exact,
+        basis=basis,
+        max_sensitivity=max_sensitivity,
+    )
+
+
+def _zero_scale(name: str, start: dict[str, float], w: np.ndarray) -> float:
+    """A scale for a gain that starts at 0: the gain whose effect in the band matches kp's (or 1000 A/m)."""
+    kp = abs(start.get("kp", 0.0)) or 1000.0
+    wm = float(np.sqrt(w.min() * w.max()))
+    return {"kp": kp, "ki": kp * wm, "kd": kp / wm}.get(name, 1.0)
