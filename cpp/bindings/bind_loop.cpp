@@ -33,4 +33,35 @@ void bind_loop(py::module_& m) {
         py::arg("rig"), py::arg("controller"), py::arg("force"), py::arg("seed") = 0,
         "Runs the closed loop from rest on a force sequence (N) at fs; returns the recorded force (N), sensor "
         "displacement (m) and coil current (A). Releases the GIL while it runs; Ctrl-C stops it.");
+
+    m.def(
+        "normal_noise",
+        [](std::uint64_t seed, const std::vector<Eigen::Index>& chunks, double sigma) {
+            Eigen::Index n = 0;
+            for (Eigen::Index c : chunks) {
+                if (c < 0) throw std::invalid_argument("chunks must be >= 0");
+                n += c;
+            }
+            py::array_t<double> out(n);
+            NormalStream stream(seed);
+            double* at = out.mutable_data();
+            for (Eigen::Index c : chunks) {
+                stream.fill(at, c, sigma);
+                at += c;
+            }
+            return out;
+        },
+        py::arg("seed"), py::arg("chunks"), py::arg("sigma") = 1.0,
+        "The loop's noise stream of this seed (the sensor's; the force's is seed ^ 0x9e3779b97f4a7c15): "
+        "sum(chunks) deviates of N(0, sigma^2), drawn in calls of the given sizes.");
+    m.def(
+        "xoshiro256pp",
+        [](std::uint64_t seed, Eigen::Index n) {
+            if (n < 0) throw std::invalid_argument("n must be >= 0");
+            py::array_t<std::uint64_t> out(n);
+            Xoshiro256pp rng(seed);
+            for (Eigen::Index j = 0; j < n; ++j) out.mutable_data()[j] = rng();
+            return out;
+        },
+        py::arg("seed"), py::arg("n"), "The first n outputs of the noise generator for this seed (tests).");
 }

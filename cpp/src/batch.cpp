@@ -201,7 +201,7 @@ void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* poi
     const double limit = rig.command_limit(), touchdown = rig.touchdown_at();
     const bool checked = std::isfinite(limit) || std::isfinite(touchdown);
     std::vector<double> displacement(static_cast<std::size_t>(L) * n), noise(displacement.size(), 0.0);
-    Eigen::VectorXd lane_y(L), lane_f(L), recorded(L), draws(L);
+    Eigen::VectorXd lane_y(L), lane_f(L), recorded(L);
     ForceTransducer transducer(rig, first.period());  // sees the same force in every lane
     Eigen::Index last = 0;
     estimators.reserve(n);
@@ -218,10 +218,8 @@ void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* poi
     for (Eigen::Index p = 0; p < last; ++p) {
         poll_interrupt();
         if (rig.sensor_noise > 0.0)
-            for (std::size_t g = 0; g < n; ++g) {
-                sensor_noise[g].fill(draws.data(), L, rig.sensor_noise);
-                for (Eigen::Index j = 0; j < L; ++j) noise[static_cast<std::size_t>(j) * n + g] = draws[j];
-            }
+            for (std::size_t g = 0; g < n; ++g)
+                sensor_noise[g].fill(&noise[g], L, rig.sensor_noise, static_cast<Eigen::Index>(n));
         for (Eigen::Index j = 0; j < L; ++j) {
             const double f = period_force[j];
             const double* noise_now = &noise[static_cast<std::size_t>(j) * n];
@@ -243,10 +241,8 @@ void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* poi
             const bool recording =
                 !touched[g] && p >= points[g].settle_periods && p < points[g].settle_periods + periods;
             lane_f = recorded;
-            if (rig.force_noise > 0.0) {  // drawn whether recorded or not, as a single run draws it
-                force_noise[g].fill(draws.data(), L, rig.force_noise);
-                lane_f += draws;
-            }
+            if (rig.force_noise > 0.0)  // drawn whether recorded or not, as a single run draws it
+                force_noise[g].add(lane_f.data(), L, rig.force_noise);
             if (!recording) continue;
             for (Eigen::Index j = 0; j < L; ++j) lane_y[j] = displacement[static_cast<std::size_t>(j) * n + g];
             estimators[g].add_period(lane_f.data(), lane_y.data(), p * L);

@@ -61,10 +61,8 @@ void Loop::run(const double* force, Eigen::Index n, Channels out) {
         else
             run_linear(force + start, m, part, noise);
         transducer_.record(force + start, m, part.force);
-        if (rig_.force_noise > 0.0) {
-            force_rng_.fill(force_noise_.data(), m, rig_.force_noise);
-            for (Eigen::Index j = 0; j < m; ++j) part.force[j] += force_noise_[j];
-        }
+        if (rig_.force_noise > 0.0)
+            force_rng_.add(part.force, m, rig_.force_noise);
         k_ += m;
     }
 }

@@ -1,6 +1,7 @@
 // The C++ core on its own, for the sanitizer build (AMB_FAST_SANITIZE): every path once, with checks
 // against independent answers. The Python test suite is the full one; this driver exists so that
 // AddressSanitizer and UndefinedBehaviorSanitizer see the core without an interpreter around it.
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <cstdio>
@@ -13,6 +14,8 @@
 #include "amb_fast/errors.hpp"
 #include "amb_fast/experiment.hpp"
 #include "amb_fast/loop.hpp"
+#include "amb_fast/random.hpp"
+#include "amb_fast/mimo.hpp"
 #include "amb_fast/spectrum.hpp"
 
 using namespace amb_fast;
@@ -203,6 +206,58 @@ int main() {
         check(diff < 1e-6 * peak, "non-linear law is linear at small amplitude");
     }
 
+    {  // Noise: the same numbers however a run is cut into calls, and N(0, 1) in its first moments.
+        Rig noisy = rig;
+        noisy.sensor_noise = 2e-8;
+        noisy.force_noise = 1e-3;
+        const Eigen::Index n = 5000;
+        std::vector<double> f(static_cast<std::size_t>(n)), r1(f.size()), y1(f.size()), i1(f.size());
+        for (std::size_t k = 0; k < f.size(); ++k) f[k] = std::sin(0.01 * static_cast<double>(k));
+        std::vector<double> r2 = r1, y2 = y1, i2 = i1;
+        Loop whole(noisy, ctrl, 42), pieces(noisy, ctrl, 42);
+        whole.run(f.data(), n, {r1.data(), y1.data(), i1.data()});
+        Eigen::Index at = 0;
+        for (Eigen::Index m : {1, 999, 1024, 1, 2000, 975}) {
+            pieces.run(f.data() + at, m, {r2.data() + at, y2.data() + at, i2.data() + at});
+            at += m;
+        }
+        check(at == n && r1 == r2 && y1 == y2 && i1 == i2, "noisy loop in pieces equals one call bit for bit");
+        NormalStream a(7), b(7);
+        std::vector<double> one(100000), cut(100000);
+        a.fill(one.data(), 100000, 1.0);
+        b.fill(cut.data(), 33333, 1.0);
+        b.fill(cut.data() + 33333, 66667, 1.0);
+        check(one == cut, "noise stream in pieces equals one call");
+        double mean = 0.0, var = 0.0;
+        for (double z : one) mean += z / 1e5, var += z * z / 1e5;
+        check(std::abs(mean) < 5 / std::sqrt(1e5) && std::abs(var - 1) < 5 * std::sqrt(2 / 1e5), "noise moments");
+    }
+
+    {  // The estimator's transform: FFT and direct sum agree with a plain DFT of a known signal.
+        const Eigen::Index L = 4001;  // prime: pocketfft's Bluestein path
+        std::vector<double> x(static_cast<std::size_t>(L));
+        for (std::size_t k = 0; k < x.size(); ++k) x[k] = std::cos(0.3 * static_cast<double>(k)) + 1e-3 * static_cast<double>(k % 7);
+        const std::vector<Eigen::Index> bins{0, 1, 17, 2000};
+        std::vector<cd> by_fft(bins.size()), by_sum(bins.size());
+        LineTransform fft(L, bins, LineTransform::Method::fft), sum(L, bins, LineTransform::Method::direct);
+        fft(x.data(), by_fft.data());
+        sum(x.data(), by_sum.data());
+        double worst = 0.0, scale = 0.0;
+        for (std::size_t j = 0; j < bins.size(); ++j) {
+            long double re = 0, im = 0;  // plain DFT in extended precision
+            for (Eigen::Index k = 0; k < L; ++k) {
+                const long double angle = -2.0L * 3.141592653589793238462643383279502884L *
+                                          static_cast<long double>((bins[j] * k) % L) / static_cast<long double>(L);
+                re += x[static_cast<std::size_t>(k)] * std::cos(angle);
+                im += x[static_cast<std::size_t>(k)] * std::sin(angle);
+            }
+            const cd exact(static_cast<double>(re), static_cast<double>(im));
+            scale = std::max(scale, std::abs(exact));
+            worst = std::max({worst, std::abs(by_fft[j] - exact), std::abs(by_sum[j] - exact)});
+        }
+        check(worst < 1e-12 * scale, "line transform (FFT and direct sum) matches a plain DFT");
+    }
+
     {  // Bad input.
         Rig bad = rig;
         bad.mass = -1.0;
@@ -219,6 +274,56 @@ int main() {
         std::vector<double> ones(40000, 1.0), r(40000), y(40000), i(40000);
         check_throws<std::overflow_error>([&] { simulate(rig, soft.controller(), ones.data(), 40000, {r.data(), y.data(), i.data()}); },
                                           "unstable loop stops at a non-finite state");
+    }
+
+    {  // The dense MIMO loop: two uncoupled first-order lags z' = a z + (1 - a) f, one with a 0.5 coupling
+        // into the other, against the recursion written out; the steady start against a long settle;
+        // the ziggurat's first two moments.
+        MimoModel model;
+        model.M = (Eigen::MatrixXd(2, 2) << 0.9, 0.0, 0.5, 0.7).finished();
+        model.Bf = (Eigen::MatrixXd(2, 2) << 0.1, 0.0, 0.0, 0.3).finished();
+        model.Bn = Eigen::MatrixXd::Zero(2, 2);
+        model.C = Eigen::MatrixXd::Identity(2, 2);
+        model.Dn = Eigen::MatrixXd::Zero(2, 2);
+        model.transducer_pole = Eigen::Vector2d(0.0, 0.5);
+        model.sensor_noise = model.force_noise = Eigen::Vector2d::Zero();
+        const Eigen::Index n = 300;
+        std::vector<double> f(2 * n), rec(2 * n), out(2 * n);
+        for (Eigen::Index k = 0; k < 2 * n; ++k) f[k] = std::sin(0.3 * static_cast<double>(k));
+        mimo_simulate(model, f.data(), n, 1, rec.data(), out.data());
+        double z0 = 0.0, z1 = 0.0, q = 0.0, worst = 0.0;
+        for (Eigen::Index k = 0; k < n; ++k) {
+            worst = std::max({worst, std::abs(out[2 * k] - z0), std::abs(out[2 * k + 1] - z1),
+                              std::abs(rec[2 * k] - f[2 * k]), std::abs(rec[2 * k + 1] - (f[2 * k + 1] - q))});
+            q = 0.5 * q + 0.5 * f[2 * k + 1];
+            const double next0 = 0.9 * z0 + 0.1 * f[2 * k], next1 = 0.5 * z0 + 0.7 * z1 + 0.3 * f[2 * k + 1];
+            z0 = next0;
+            z1 = next1;
+        }
+        check(worst < 1e-14, "MIMO loop equals its recursion written out");
+        const Eigen::Index L = 50;
+        // Each of the two experiments records 2 channels x 2 periods of L samples.
+        std::vector<double> period(f.begin(), f.begin() + 2 * L), steady_rec(8 * L), steady_y(8 * L), settled_rec(8 * L),
+            settled_y(8 * L);
+        const double* forces[2] = {period.data(), period.data()};
+        double* recs[2] = {steady_rec.data(), steady_rec.data() + 4 * L};
+        double* ys[2] = {steady_y.data(), steady_y.data() + 4 * L};
+        mimo_experiments(model, forces, L, 0, 2, {1, 2}, true, recs, ys);
+        double* recs2[2] = {settled_rec.data(), settled_rec.data() + 4 * L};
+        double* ys2[2] = {settled_y.data(), settled_y.data() + 4 * L};
+        mimo_experiments(model, forces, L, 40, 2, {1, 2}, false, recs2, ys2);
+        double gap = 0.0;
+        for (std::size_t k = 0; k < steady_y.size(); ++k)
+            gap = std::max({gap, std::abs(steady_y[k] - settled_y[k]), std::abs(steady_rec[k] - settled_rec[k])});
+        check(gap < 1e-12, "MIMO steady start equals a long settle (" + std::to_string(gap) + ")");
+        NormalStream normal(7);
+        std::vector<double> draws(200000);
+        normal.fill(draws.data(), static_cast<Eigen::Index>(draws.size()), 2.0);
+        double mean = 0.0, square = 0.0;
+        for (double d : draws) mean += d, square += d * d;
+        mean /= static_cast<double>(draws.size());
+        square /= static_cast<double>(draws.size());
+        check(std::abs(mean) < 0.02 && std::abs(square / 4.0 - 1.0) < 0.02, "ziggurat normal draws: mean 0, variance 4");
     }
 
     std::printf("%d passed, %d failed\n", passed, failed);

@@ -109,7 +109,7 @@ private:
     // One stream per noise source, so the draws do not depend on how a run is cut into chunks.
     std::uint64_t seed_;
     NormalStream sensor_rng_, force_rng_;
-    Eigen::VectorXd sensor_noise_ = Eigen::VectorXd::Zero(chunk), force_noise_ = Eigen::VectorXd::Zero(chunk);
+    Eigen::VectorXd sensor_noise_ = Eigen::VectorXd::Zero(chunk);
     ForceTransducer transducer_;
 };
 

@@ -1,0 +1,83 @@
+#include "amb_fast/mimo.hpp"
+#include "bindings.hpp"
+
+using namespace amb_fast;
+
+namespace {
+using InputArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using Matrix = Eigen::Ref<const Eigen::MatrixXd>;
+using Vector = Eigen::Ref<const Eigen::VectorXd>;
+
+MimoModel model_of(const Matrix& M, const Matrix& Bf, const Matrix& Bn, const Matrix& C, const Matrix& Dn,
+                   const Vector& transducer_pole, const Vector& sensor_noise, const Vector& force_noise) {
+    MimoModel model{M, Bf, Bn, C, Dn, transducer_pole, sensor_noise, force_noise};
+    model.validate();
+    return model;
+}
+}  // namespace
+
+void bind_mimo(py::module_& m) {
+    m.def(
+        "mimo_simulate",
+        [](const Matrix& M, const Matrix& Bf, const Matrix& Bn, const Matrix& C, const Matrix& Dn,
+           const Vector& transducer_pole, const Vector& sensor_noise, const Vector& force_noise,
+           const InputArray& force, std::uint64_t seed) {
+            const MimoModel model = model_of(M, Bf, Bn, C, Dn, transducer_pole, sensor_noise, force_noise);
+            const auto p = model.forces(), r = model.outputs();
+            if (force.ndim() != 2 || force.shape(1) != p)
+                throw std::invalid_argument("force must have shape (samples, " + std::to_string(p) + ")");
+            const auto n = static_cast<Eigen::Index>(force.shape(0));
+            py::array_t<double> recorded({n, p}), out({n, r});
+            double *rec = recorded.mutable_data(), *o = out.mutable_data();
+            const double* input = force.data();
+            interruptible([&] {
+                mimo_simulate(model, input, n, seed, rec, o);
+                return 0;
+            });
+            return py::make_tuple(recorded, out);
+        },
+        py::arg("M"), py::arg("Bf"), py::arg("Bn"), py::arg("C"), py::arg("Dn"), py::arg("transducer_pole"),
+        py::arg("sensor_noise"), py::arg("force_noise"), py::arg("force"), py::arg("seed") = 0,
+        "Runs the dense MIMO loop z' = M z + Bf f + Bn n, o = C z + Dn n from rest on force (samples, p); returns "
+        "the recorded forces (samples, p) and the outputs (samples, r). Releases the GIL; Ctrl-C stops it.");
+    m.def(
+        "mimo_experiments",
+        [](const Matrix& M, const Matrix& Bf, const Matrix& Bn, const Matrix& C, const Matrix& Dn,
+           const Vector& transducer_pole, const Vector& sensor_noise, const Vector& force_noise,
+           const InputArray& period_forces, Eigen::Index settle_periods, Eigen::Index periods,
+           const std::vector<std::uint64_t>& seeds, bool steady_start, bool all_forces) {
+            const MimoModel model = model_of(M, Bf, Bn, C, Dn, transducer_pole, sensor_noise, force_noise);
+            const auto p = model.forces(), q = model.probes();
+            if (period_forces.ndim() != 3 || period_forces.shape(2) != p ||
+                static_cast<std::size_t>(period_forces.shape(0)) != seeds.size())
+                throw std::invalid_argument("period_forces must have shape (len(seeds), period, " + std::to_string(p) +
+                                            ")");
+            const auto K = static_cast<Eigen::Index>(period_forces.shape(0));
+            const auto L = static_cast<Eigen::Index>(period_forces.shape(1));
+            if (periods < 2) throw std::invalid_argument("periods must be >= 2, got " + std::to_string(periods));
+            py::array_t<double> recorded({K, p, all_forces ? periods * L : L}), measured({K, q, periods * L});
+            double *rec = recorded.mutable_data(), *mea = measured.mutable_data();
+            const double* input = period_forces.data();
+            if (K < 1 || K > 2) throw std::invalid_argument("seeds must hold 1 or 2 seeds (experiments in lock step)");
+            std::vector<const double*> forces;
+            std::vector<double*> recs, meas;
+            for (Eigen::Index k = 0; k < K; ++k) {
+                forces.push_back(input + k * L * p);
+                recs.push_back(rec + k * (all_forces ? periods : 1) * L * p);
+                meas.push_back(mea + k * periods * L * q);
+            }
+            interruptible([&] {
+                mimo_experiments(model, forces.data(), L, settle_periods, periods, seeds, steady_start, recs.data(),
+                                 meas.data(), all_forces);
+                return 0;
+            });
+            return py::make_tuple(recorded, measured);
+        },
+        py::arg("M"), py::arg("Bf"), py::arg("Bn"), py::arg("C"), py::arg("Dn"), py::arg("transducer_pole"),
+        py::arg("sensor_noise"), py::arg("force_noise"), py::arg("period_forces"), py::arg("settle_periods"),
+        py::arg("periods"), py::arg("seeds"), py::arg("steady_start") = true, py::arg("all_forces") = true,
+        "Experiments with the dense MIMO loop in lock step, one per seed (1 or 2): period_forces[k] (period, p) repeated for "
+        "settle_periods + periods from rest or the periodic steady state; returns the recorded forces "
+        "(experiments, p, periods * period; only the first period, (experiments, p, period), with all_forces=False) and "
+        "measured displacements (experiments, q, periods * period).");
+}

@@ -1,0 +1,88 @@
+// A generic dense multi-input multi-output sampled-data loop, closed and discretised already:
+//
+//     z[k+1] = M z[k] + Bf f[k] + Bn n[k]        f: held forces (p), n: white probe noise (q)
+//     o[k]   = C z[k] + Dn n[k]                  o: the q measured displacements first, then any others
+//
+// It knows nothing about magnetic bearings beyond these shapes (the Python layer builds the matrices,
+// exactly discretised); it adds what the measurement chain does outside the loop: per force channel an
+// AC-coupled transducer (q[k+1] = a q[k] + (1 - a) f[k], recorded f - q; a = 0 is DC coupled) and
+// white transducer noise, one noise stream per source.
+#pragma once
+
+#include <Eigen/Dense>
+#include <cstdint>
+#include <vector>
+
+#include "amb_fast/random.hpp"
+
+namespace amb_fast {
+
+struct MimoModel {
+    Eigen::MatrixXd M, Bf, Bn, C, Dn;
+    Eigen::VectorXd transducer_pole;  // per force channel, 0 = DC coupled
+    Eigen::VectorXd sensor_noise;     // m rms per probe (q)
+    Eigen::VectorXd force_noise;      // N rms per force channel (p)
+
+    Eigen::Index states() const { return M.rows(); }
+    Eigen::Index forces() const { return Bf.cols(); }
+    Eigen::Index probes() const { return Bn.cols(); }
+    Eigen::Index outputs() const { return C.rows(); }
+    // Throws std::invalid_argument naming the matrix whose shape or values are wrong.
+    void validate() const;
+};
+
+// The loop keeps its state between calls to run(), so long runs can be streamed. It advances `lanes`
+// independent runs of the same model in lock step (each with its own forces, noise and state): they
+// share every load of the matrix, and their sample-to-sample chains overlap.
+class MimoLoop {
+public:
+    MimoLoop(const MimoModel& model, const std::vector<std::uint64_t>& seeds);  // one seed per lane
+
+    Eigen::Index lanes() const { return lanes_; }
+    // Advances n samples of every lane. force[l]: n x p, sample-major (row k holds f[k]); recorded[l]:
+    // n x p; out[l]: n x r. Throws std::overflow_error if a state stops being finite.
+    void run(const double* const* force, Eigen::Index n, double* const* recorded, double* const* out);
+
+    // Starts every lane in the periodic steady state of its L-sample period (L x p, sample-major)
+    // repeated forever: z0 = M^L z0 + z_L, the transducers likewise; with probe noise, the
+    // noise-driven part of the state is drawn from its stationary distribution.
+    void start_periodic(const double* const* period_force, Eigen::Index L);
+
+    // Lane l's state z.
+    Eigen::VectorXd state(Eigen::Index lane) const;
+
+private:
+    static constexpr Eigen::Index chunk = 1024;
+    template <int K>
+    void run_block(const double* const* force, Eigen::Index start, Eigen::Index m, double* const* recorded,
+                   double* const* out);
+
+    MimoModel model_;
+    Eigen::Index lanes_;
+    Eigen::MatrixXd Mt_;  // [[M, Bf, Bn], [C, 0, Dn]] by columns: the update is a sum of columns
+    static constexpr std::size_t group = 4;
+    std::vector<Eigen::Index> group_rows_, group_length_;  // the rows of each group of four (-1: none), its length
+    std::vector<int> entry_col_;                           // entry e of the group's rows, four at a time
+    std::vector<double> entry_value_;
+    // [z; f; n] and [z'; o], lanes interleaved (entry j of lane l at j*K + l), 16-byte aligned for pairs.
+    std::vector<double, Eigen::aligned_allocator<double>> w_, next_;
+    Eigen::MatrixXd q_;             // transducer states, p x lanes
+    std::vector<std::uint64_t> seeds_;
+    std::vector<NormalStream> sensor_rng_, force_rng_;  // lane-major: source j of lane l at l*count + j
+    std::vector<Eigen::MatrixXd> sensor_draws_, force_draws_;  // per lane: chunk x q, chunk x p
+    Eigen::Index k_ = 0;
+};
+
+// Runs the loop from rest: recorded forces (n x p) and outputs (n x r), sample-major.
+void mimo_simulate(const MimoModel& model, const double* force, Eigen::Index n, std::uint64_t seed, double* recorded,
+                   double* out);
+
+// Experiments in lock step, one per seed: period_force[l] (L x p) repeated for settle + periods, from
+// rest or the periodic steady state; the recorded periods' forces recorded[l] (p x periods*L) and
+// measured displacements measured[l] (q x periods*L), channel-major (one contiguous record per channel).
+// With all_forces false, recorded[l] (p x L) holds the first recorded period only.
+void mimo_experiments(const MimoModel& model, const double* const* period_force, Eigen::Index L,
+                      Eigen::Index settle_periods, Eigen::Index periods, const std::vector<std::uint64_t>& seeds,
+                      bool steady_start, double* const* recorded, double* const* measured, bool all_forces = true);
+
+}  // namespace amb_fast

@@ -1,0 +1,73 @@
+"""Two axes of a radial magnetic bearing: 2x2 stiffness and damping matrices, identified, exported to ROSS.
+
+Here live :class:`TwoAxisRig` (two one-axis rigs on one rotor, a cross-coupling process, rotated probes),
+the two-axis loop in closed form (:func:`predict`, :func:`closed_loop_poles`, :func:`stability_margin`,
+:func:`effective_coefficients`), its simulation on the compiled dense MIMO loop (:func:`simulate`), the
+two-experiment identification (:func:`run_experiment`, :func:`identify` giving an :class:`Estimate2`),
+sweeps over two-axis rigs, the export to ``ross.BearingElement`` (:func:`to_ross`) and a pure-numpy
+reference loop (:mod:`amb_fast.two_axis.reference`). Same names and signatures as the one-axis API,
+with a :class:`TwoAxisRig` in place of a :class:`~amb_fast.Rig`.
+"""
+
+from __future__ import annotations
+
+from ._experiment import SIGNS, Estimate2, Trace2, excitation_pair, identify, run_experiment, simulate
+from ._model import (
+    ControllerMatrix,
+    StabilityMargin2,
+    closed_loop,
+    closed_loop_poles,
+    controller_matrix,
+    discrete_plant2,
+    effective_coefficients,
+    loop_model,
+    plant_matrices2,
+    predict,
+    sensitivity,
+    stability_margin,
+)
+from ._rig import TwoAxisRig
+from ._ross import coefficient_arrays, to_ross
+from ._sweep import (
+    SweepResult2,
+    add_two_axis_options,
+    plot_coefficients2,
+    point_model2,
+    run_two_axis,
+    save_estimate2,
+    summary2,
+    sweep,
+)
+
+__all__ = [
+    "SIGNS",
+    "ControllerMatrix",
+    "Estimate2",
+    "StabilityMargin2",
+    "SweepResult2",
+    "Trace2",
+    "TwoAxisRig",
+    "add_two_axis_options",
+    "closed_loop",
+    "closed_loop_poles",
+    "coefficient_arrays",
+    "controller_matrix",
+    "discrete_plant2",
+    "effective_coefficients",
+    "excitation_pair",
+    "identify",
+    "loop_model",
+    "plot_coefficients2",
+    "point_model2",
+    "plant_matrices2",
+    "predict",
+    "run_experiment",
+    "run_two_axis",
+    "save_estimate2",
+    "sensitivity",
+    "simulate",
+    "stability_margin",
+    "summary2",
+    "sweep",
+    "to_ross",
+]

@@ -1,0 +1,319 @@
+"""Two-axis simulation, the two-experiment MIMO identification, and the 2x2 estimate."""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .. import _core
+from .._excitation import Multisine, period_samples
+from .._experiment import MAX_AUTOMATIC_SETTLE, _lines
+from .._linear import settle_periods_for
+from .._validate import integer, real, require, seed_value
+from ._model import ControllerSpec, LoopModel, controller_matrix, loop_model, require_stable
+from ._rig import TwoAxisRig
+
+#: Force signs of the two experiments (rows: experiment, columns: axis): x gets +s in both, y +s then
+#: -s, so the 2x2 force matrix at every line is s [[1, 1], [1, -1]]: invertible.
+SIGNS = np.array([[1.0, 1.0], [1.0, -1.0]])
+
+
+@dataclass(frozen=True)
+class Trace2:
+    """Recorded channels of one two-axis run, sampled at ``fs``; columns (x, y).
+
+    Attributes
+    ----------
+    force : ndarray
+        (n, 2) recorded forces on the actuator axes, N (through each transducer, plus its noise).
+    displacement : ndarray
+        (n, 2) probe readings, m (rotated by ``sensor_angle``, through each probe's lag, plus noise).
+    current : ndarray
+        (n, 2) coil control currents, A.
+    fs : float
+        Hz.
+    """
+
+    force: np.ndarray
+    displacement: np.ndarray
+    current: np.ndarray
+    fs: float
+
+    @property
+    def time(self) -> np.ndarray:
+        """Sample instants kT, s."""
+        return np.arange(self.force.shape[0]) / self.fs
+
+
+def _core_args(model: LoopModel, rig: TwoAxisRig, outputs: int = 4) -> dict[str, np.ndarray]:
+    """The core's model; ``outputs=2`` keeps only the probe readings (experiments need no currents)."""
+    return dict(M=model.M, Bf=model.Bf, Bn=model.Bn, C=model.C[:outputs], Dn=model.Dn[:outputs],
+                transducer_pole=model.poles, sensor_noise=np.array([a.sensor_noise for a in rig.axes]),
+                force_noise=np.array([a.force_noise for a in rig.axes]))  # fmt: skip
+
+
+def _forces(name: str, values: Any) -> np.ndarray:
+    array = np.ascontiguousarray(values, dtype=np.float64)
+    require(array.ndim == 2 and array.shape[1] == 2, f"{name} shape", array.shape, "(samples, 2): columns x, y")
+    return array
+
+
+def simulate(rig: TwoAxisRig, controller: ControllerSpec, force: ArrayLike, *, seed: int | None = None) -> Trace2:
+    """Run the two-axis closed loop from rest on forces (n, 2) (N, columns x, y) at the controller's ``fs``.
+
+    ``controller``: one controller for both axes, a pair ``(cx, cy)``, or a 2x2 matrix of them (cross
+    feedback; ``None`` for an absent entry). The forces are zero-order held; the loop is discretised
+    exactly. ``seed`` fixes the noise (one stream per probe and per transducer).
+    """
+    model = loop_model(rig, controller)
+    force = _forces("force", force)
+    recorded, out = _core.mimo_simulate(**_core_args(model, rig), force=force, seed=seed_value(seed))
+    return Trace2(force=recorded, displacement=out[:, :2], current=out[:, 2:], fs=model.fs)
+
+
+@dataclass(frozen=True)
+class Estimate2:
+    """2x2 frequency-domain estimate at the excited lines; every matrix has shape (lines, 2, 2).
+
+    Attributes
+    ----------
+    freq : ndarray
+        Excited lines, Hz.
+    H : ndarray
+        Dynamic stiffness ``F Y^-1``, complex, N/m: ``H[:, i, j] = dF_i / dY_j`` with F the recorded
+        forces on the actuator axes and Y the probe readings.
+    receptance : ndarray
+        ``Y F^-1 = H^-1``, m/N.
+    k, c : ndarray
+        Stiffness ``m w^2 I + Re H`` (N/m) and damping ``Im H / w`` (N s/m) matrices, ``k[:, i, j]`` is
+        ROSS's ``k_ij`` (force on the rotor ``-K q - C dq/dt``).
+    k_smooth, c_smooth : ndarray
+        Median filtered across the lines per entry (window ``median_window``, ends repeat the edge).
+    k_std, c_std : ndarray
+        Standard errors (first-order propagation of the period-to-period deviations of both
+        experiments' spectra through ``F Y^-1``; ``periods - 1`` degrees of freedom).
+    force, displacement : ndarray
+        Period-averaged complex amplitudes, ``[:, channel, experiment]``, N and m.
+    periods : int
+        Periods averaged per experiment.
+    mass : float
+        The known mass m used in ``k``, kg.
+    """
+
+    freq: np.ndarray
+    H: np.ndarray
+    receptance: np.ndarray
+    k: np.ndarray
+    c: np.ndarray
+    k_smooth: np.ndarray
+    c_smooth: np.ndarray
+    k_std: np.ndarray
+    c_std: np.ndarray
+    force: np.ndarray
+    displacement: np.ndarray
+    periods: int
+    mass: float
+
+    def to_ross(self, n: int, *, smoothed: bool = False, **kwargs: Any) -> Any:
+        """This estimate as a ``ross.BearingElement`` at node ``n`` (see :func:`amb_fast.two_axis.to_ross`)."""
+        from ._ross import to_ross
+
+        return to_ross(self, n, smoothed=smoothed, **kwargs)
+
+
+def period_spectra(x: np.ndarray, harmonics: np.ndarray, period: int) -> np.ndarray:
+    """Line spectra of every period: (2 experiments, 2 channels, periods * period) to
+    (periods, lines, channel, experiment), unscaled DFT bins."""
+    P = x.shape[2] // period
+    return np.fft.rfft(x.reshape(2, 2, P, period), axis=3)[..., harmonics].transpose(2, 3, 1, 0)
+
+
+def estimate2(
+    force: np.ndarray, displacement: np.ndarray, harmonics: np.ndarray, period: int, f0: float, mass: float,
+    median_window: int = 5,
+) -> Estimate2:  # fmt: skip
+    """The 2x2 estimate from both experiments' recorded periods.
+
+    ``force``, ``displacement``: (2 experiments, 2 channels, periods * period), or already their
+    per-period line spectra (periods, lines, channel, experiment), complex.
+    """
+    Fp = force if np.iscomplexobj(force) else period_spectra(force, harmonics, period)
+    Yp = displacement if np.iscomplexobj(displacement) else period_spectra(displacement, harmonics, period)
+    P = Fp.shape[0]
+    F, Y = Fp.mean(axis=0), Yp.mean(axis=0)
+    if not (np.all(np.isfinite(F)) and np.all(np.isfinite(Y))):
+        raise ValueError("force and displacement must be finite")
+    Yinv = _inverse(Y)
+    H = _product(F, Yinv)
+    # Linearised: dH = (dF - H dY) Y^-1 per period; the variance of the mean over the periods.
+    dH = _product((Fp - F) - _product(H, Yp - Y), Yinv)
+    var_re = np.sum(dH.real**2, axis=0) / (P * (P - 1))
+    var_im = np.sum(dH.imag**2, axis=0) / (P * (P - 1))
+    w = (2 * np.pi * harmonics * f0)[:, None, None]
+    k = mass * w**2 * np.eye(2) + H.real
+    c = H.imag / w
+    scale = 2.0 / period
+    return Estimate2(
+        freq=harmonics * f0,
+        H=H,
+        receptance=_inverse(H),
+        k=k,
+        c=c,
+        k_smooth=_median(k, median_window),
+        c_smooth=_median(c, median_window),
+        k_std=np.sqrt(var_re),
+        c_std=np.sqrt(var_im) / w,
+        force=scale * F,
+        displacement=scale * Y,
+        periods=P,
+        mass=mass,
+    )
+
+
+def _median(x: np.ndarray, window: int) -> np.ndarray:
+    """Running median across the lines (axis 0) per entry; the ends repeat the edge value."""
+    half = window // 2
+    padded = np.concatenate([np.repeat(x[:1], half, axis=0), x, np.repeat(x[-1:], half, axis=0)])
+    return np.median(np.lib.stride_tricks.sliding_window_view(padded, window, axis=0), axis=-1)
+
+
+def _inverse(A: np.ndarray) -> np.ndarray:
+    """Inverses of a stack of 2x2 matrices (..., 2, 2), written out."""
+    a, b, c, d = A[..., 0, 0], A[..., 0, 1], A[..., 1, 0], A[..., 1, 1]
+    det = a * d - b * c
+    return np.stack([np.stack([d, -b], -1), np.stack([-c, a], -1)], -2) / det[..., None, None]
+
+
+def _product(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Products of stacks of 2x2 matrices, written out (numpy's matmul is slow on tiny matrices)."""
+    a = A[..., :, 0, None] * B[..., None, 0, :]
+    a += A[..., :, 1, None] * B[..., None, 1, :]
+    return a
+
+
+def excitation_pair(excitation: Multisine) -> np.ndarray:
+    """The two experiments' forces, (2, period, 2): x = +s, +s and y = +s, -s."""
+    return np.ascontiguousarray(SIGNS[:, None, :] * excitation.samples[None, :, None])
+
+
+def _window(median_window: int) -> int:
+    window = integer("median_window", median_window, 1)
+    require(window % 2 == 1, "median_window", median_window, "odd")
+    return window
+
+
+def run_experiment(
+    rig: TwoAxisRig,
+    controller: ControllerSpec,
+    excitation: Multisine,
+    *,
+    periods: int = 10,
+    settle_periods: int | None = None,
+    seed: int | None = None,
+    median_window: int = 5,
+    start: Literal["steady", "rest"] = "steady",
+) -> Estimate2:
+    """The two-axis SPHS identification: two experiments, then ``H = F Y^-1`` per line.
+
+    Experiment 1 drives both axes with the multisine ``s``, experiment 2 drives x with ``s`` and y with
+    ``-s`` (:data:`SIGNS`), each ``periods`` recorded periods from the exact periodic steady state
+    (``start="steady"``, no settling needed) or from rest after ``settle_periods`` (default: enough for
+    the slowest pole, or transducer pole, to decay below 1e-9). ``seed`` fixes the noise of both
+    experiments. Raises :class:`UnstableLoopError` for an unstable loop.
+    """
+    require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
+    spec = controller_matrix(controller)
+    require(excitation.fs == spec.fs, "excitation.fs", excitation.fs, f"equal to the controller's fs ({spec.fs} Hz)")
+    periods = integer("periods", periods, 2)
+    window = _window(median_window)
+    require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
+    poles = require_stable(rig, spec)
+    period = excitation.period_samples
+    if settle_periods is None:
+        settle_periods = 0 if start == "steady" else _settle(rig, spec.fs, poles, period)
+    settle_periods = integer("settle_periods", settle_periods, 0)
+    model = loop_model(rig, spec)
+    s = seed_value(seed)
+    seeds = [s, (s ^ 0xA5A5A5A5DEADBEEF) % 2**64]
+    args = _core_args(model, rig, outputs=2)
+    harmonics = excitation.harmonics
+    steady = start == "steady"
+    if steady:  # the transducer noise is drawn in the frequency domain (below), not in the loop
+        args["force_noise"] = np.zeros(2)
+    force, displacement = _core.mimo_experiments(**args, period_forces=excitation_pair(excitation),
+                                                 settle_periods=settle_periods, periods=periods, seeds=seeds,
+                                                 steady_start=steady, all_forces=not steady)  # fmt: skip
+    Fp: np.ndarray = force
+    if steady:
+        # In the periodic steady state the recorded force is the same every period (to rounding) plus the
+        # transducer's white noise, which enters nothing else: its line spectra per period are independent
+        # complex normals with variance period * sigma^2 (exact in distribution; half the FFTs).
+        lines = np.fft.rfft(force[:, :, :period], axis=2)[..., harmonics].transpose(2, 1, 0)  # (lines, ch, exp)
+        sigma = np.sqrt(period / 2) * np.array([a.force_noise for a in rig.axes])[None, None, :, None]
+        draws = np.random.default_rng([s, 0x5EED]).standard_normal((2, periods, harmonics.size, 2, 2))
+        Fp = lines[None] + sigma * (draws[0] + 1j * draws[1])
+    return estimate2(Fp, displacement, harmonics, period, excitation.f0, rig.mass, window)
+
+
+def _settle(rig: TwoAxisRig, fs: float, poles: np.ndarray, period: int) -> int:
+    slowest = float(np.max(np.abs(poles), initial=0.0))
+    for axis in rig.axes:
+        if axis.force_coupling_tau is not None:
+            slowest = max(slowest, float(np.exp(-1.0 / (fs * axis.force_coupling_tau))))
+    periods = int(settle_periods_for(np.array(slowest), period))
+    if periods > MAX_AUTOMATIC_SETTLE:
+        raise ValueError(f"settling from rest would take {periods} periods (> {MAX_AUTOMATIC_SETTLE}): slowest pole "
+                         f"|z| = {slowest:.12g}; use start='steady' or give settle_periods")  # fmt: skip
+    return periods
+
+
+def identify(
+    force: ArrayLike,
+    displacement: ArrayLike,
+    *,
+    fs: float,
+    f0: float,
+    mass: float,
+    f_max: float | None = None,
+    lines: ArrayLike | None = None,
+    settle_periods: int = 0,
+    median_window: int = 5,
+) -> Estimate2:
+    """The 2x2 estimate from two recorded experiments of a real two-axis rig.
+
+    ``force``, ``displacement``: one (n, 2) recording per experiment (N and m; columns x, y), given as a
+    pair or an array of shape (2, n, 2). The two experiments' force matrices must be invertible at
+    every line (drive them as :func:`run_experiment` does: x = +s, +s; y = +s, -s). ``mass``: the
+    rotor's known mass (kg). Lines as in :func:`amb_fast.identify` (``lines``, ``f_max``, else the
+    harmonics the first experiment's x force excites). Trailing samples short of a whole period are
+    dropped with a warning.
+    """
+    F = np.asarray(force, dtype=np.float64)
+    Y = np.asarray(displacement, dtype=np.float64)
+    require(F.ndim == 3 and F.shape[0] == 2 and F.shape[2] == 2, "force shape", F.shape,
+            "(2 experiments, samples, 2 axes)")  # fmt: skip
+    require(Y.shape == F.shape, "displacement shape", Y.shape, f"{F.shape} like force")
+    fs = real("fs", fs, "Hz", positive=True)
+    f0 = real("f0", f0, "Hz", positive=True)
+    mass = real("mass", mass, "kg", positive=True)
+    window = _window(median_window)
+    settle_periods = integer("settle_periods", settle_periods, 0)
+    period = period_samples(fs, f0)
+    start = settle_periods * period
+    n = F.shape[1]
+    whole = start + max(0, n - start) // period * period
+    require((whole - start) // period >= 2, "periods after settling", (whole - start) // period,
+            ">= 2 (standard errors need at least two)")  # fmt: skip
+    if whole < n:
+        warnings.warn(f"recordings are not a whole number of periods of {period} samples: dropped the last "
+                      f"{n - whole} samples", stacklevel=2)  # fmt: skip
+    F = np.ascontiguousarray(F[:, start:whole].transpose(0, 2, 1))
+    Y = np.ascontiguousarray(Y[:, start:whole].transpose(0, 2, 1))
+    for name, x in (("force", F), ("displacement", Y)):
+        require(bool(np.all(np.isfinite(x))), name, "non-finite samples", "finite")
+    harmonics = _lines(F[0, 0], period, f0, fs, f_max, lines)
+    return estimate2(F, Y, harmonics, period, f0, mass, window)

@@ -1,0 +1,243 @@
+"""Sweeps over two-axis rigs and controllers, plots of the 2x2 coefficients, the ``run --two-axis`` command."""
+
+from __future__ import annotations
+
+import argparse
+import os
+from collections.abc import Iterator, Sequence
+from concurrent.futures import Executor, ThreadPoolExecutor
+from dataclasses import dataclass, fields, replace
+from functools import partial
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .._errors import UnstableLoopError
+from .._excitation import Multisine, schroeder_multisine
+from .._linear import AnyController
+from .._params import PID, Rig
+from .._sweep import _grid, point_seeds
+from .._validate import require, seed_value
+from ..io._atomic import atomic_write
+from ._experiment import Estimate2, run_experiment
+from ._model import ControllerMatrix, ControllerSpec, controller_matrix, effective_coefficients, stability_margin
+from ._rig import TwoAxisRig
+
+_RIG_FIELDS = ("kxy", "kyx", "cxy", "cyx", "sensor_angle")
+_AXIS_FIELDS = tuple(f.name for f in fields(Rig) if f.name not in ("force_law", "substeps", "mass"))
+_GAINS = ("kp", "ki", "kd", "derivative_cutoff")
+
+
+@dataclass(frozen=True)
+class SweepResult2:
+    """Two-axis estimates over a grid of points; matrices have shape (points, lines, 2, 2).
+
+    Attributes
+    ----------
+    params : dict of ndarray
+        Each swept name's value per point.
+    freq : ndarray
+        Lines, Hz.
+    k, c, k_std, c_std : ndarray
+        Stiffness (N/m), damping (N s/m) and their standard errors; NaN at unstable points.
+    receptance : ndarray
+        Y F^-1, m/N; NaN at unstable points.
+    stable : ndarray
+        Per point, bool.
+    seeds : ndarray
+        Per point, uint64.
+    """
+
+    params: dict[str, np.ndarray]
+    freq: np.ndarray
+    k: np.ndarray
+    c: np.ndarray
+    k_std: np.ndarray
+    c_std: np.ndarray
+    receptance: np.ndarray
+    stable: np.ndarray
+    seeds: np.ndarray
+
+
+def point_model2(rig: TwoAxisRig, controller: ControllerSpec, values: dict[str, float]) -> tuple[TwoAxisRig, Any]:
+    """The rig and controller of one point: ``kxy``, ``kyx``, ``cxy``, ``cyx``, ``sensor_angle`` set on the
+    rig; ``x_<field>`` / ``y_<field>`` on that axis' :class:`Rig` (``<field>`` alone: on both); ``kp``,
+    ``ki``, ``kd``, ``derivative_cutoff`` on the diagonal PID entries, ``cross_<gain>`` on the off-diagonal
+    ones."""
+    spec = controller_matrix(controller)
+    entries = [list(row) for row in spec.entries]
+    changes: dict[str, Any] = {}
+    axis_changes: list[dict[str, Any]] = [{}, {}]
+    for name, value in values.items():
+        if name in _RIG_FIELDS:
+            changes[name] = value
+        elif name in _AXIS_FIELDS:
+            axis_changes[0][name] = axis_changes[1][name] = value
+        elif name[:2] in ("x_", "y_") and name[2:] in _AXIS_FIELDS:
+            axis_changes["xy".index(name[0])][name[2:]] = value
+        else:
+            cross = name.startswith("cross_")
+            gain = name[6:] if cross else name
+            require(gain in _GAINS, "sweep axis", name, "a TwoAxisRig field (kxy, ...), [x_|y_]<Rig field> or "
+                    "[cross_]<PID gain>")  # fmt: skip
+            for i in range(2):
+                for j in range(2):
+                    if (i != j) == cross and isinstance(entries[i][j], PID):
+                        entries[i][j] = replace(entries[i][j], **{gain: value})
+    x = replace(rig.x, **axis_changes[0]) if axis_changes[0] else rig.x
+    y = replace(rig.y, **axis_changes[1]) if axis_changes[1] else rig.y
+    return replace(rig, x=x, y=y, **changes), ControllerMatrix((tuple(entries[0]), tuple(entries[1])), spec.fs)  # type: ignore[arg-type]
+
+
+def sweep(
+    rig: TwoAxisRig,
+    controller: ControllerSpec,
+    excitation: Multisine,
+    *,
+    grid: Literal["product", "zip"] = "product",
+    periods: int = 10,
+    seed: int | None = None,
+    median_window: int = 5,
+    start: Literal["steady", "rest"] = "steady",
+    workers: int | None = 1,
+    executor: Executor | None = None,
+    **axes: ArrayLike,
+) -> SweepResult2:
+    """:func:`run_experiment` over a grid of two-axis points (names: see :func:`point_model2`), e.g.
+    ``sweep(rig, pid, sphs, kxy=np.linspace(0, 2e4, 5), kp=[2000, 2400, 2800])``. Unstable points are
+    flagged and left NaN. Point i runs with ``SweepResult2.seeds[i]``, so it reruns alone bit for bit
+    with ``run_experiment(*point_model2(rig, controller, point), excitation, seed=seeds[i])``.
+
+    The points run on ``executor`` (any :class:`concurrent.futures.Executor`), else on ``workers``
+    threads (``None``: one per core; the core and numpy's FFT release the GIL), in grid order.
+    """
+    _, points = _grid(dict(axes), grid)
+    count = next(iter(points.values())).size
+    seeds = point_seeds(seed_value(seed), count)
+    lines = excitation.freq.size
+    shape = (count, lines, 2, 2)
+    k, c, k_std, c_std = (np.full(shape, np.nan) for _ in range(4))
+    receptance = np.full(shape, np.nan, dtype=complex)
+    stable = np.zeros(count, dtype=bool)
+    models = [point_model2(rig, controller, {n: float(v[i]) for n, v in points.items()}) for i in range(count)]
+    run = partial(_point, excitation=excitation, periods=periods, median_window=median_window, start=start)
+    results: Iterator[Estimate2 | None]
+    if executor is None and workers == 1:
+        results = map(run, models, seeds.tolist())
+    else:
+        pool = executor or ThreadPoolExecutor(max_workers=workers or os.cpu_count())
+        results = pool.map(run, models, seeds.tolist())
+    for i, est in enumerate(list(results)):
+        if est is None:
+            continue
+        stable[i] = True
+        k[i], c[i], k_std[i], c_std[i], receptance[i] = est.k, est.c, est.k_std, est.c_std, est.receptance
+    if executor is None and workers != 1:
+        pool.shutdown()
+    return SweepResult2(points, excitation.freq, k, c, k_std, c_std, receptance, stable, seeds)
+
+
+def _point(model: tuple[TwoAxisRig, Any], seed: int, **options: Any) -> Estimate2 | None:
+    try:
+        return run_experiment(*model, seed=int(seed), **options)
+    except UnstableLoopError:
+        return None
+
+
+def plot_coefficients2(estimate: Estimate2, *, smoothed: bool = False, effective: tuple | None = None) -> Any:
+    """The four stiffness and four damping coefficients over frequency (a 2x4 grid of axes), with
+    1.96 standard-error bands; ``effective=(K_eff, C_eff)`` from :func:`effective_coefficients` adds
+    them as dashed lines. Needs matplotlib (extra ``plot``)."""
+    import matplotlib.pyplot as plt
+
+    k = estimate.k_smooth if smoothed else estimate.k
+    c = estimate.c_smooth if smoothed else estimate.c
+    fig, axes = plt.subplots(2, 4, figsize=(14, 6), sharex=True, layout="constrained")
+    for col, (i, j) in enumerate(((0, 0), (0, 1), (1, 0), (1, 1))):
+        label = "xy"[i] + "xy"[j]
+        for row, (values, std, unit, name) in enumerate(((k, estimate.k_std, "N/m", "k"),
+                                                         (c, estimate.c_std, "N s/m", "c"))):  # fmt: skip
+            ax = axes[row, col]
+            ax.plot(estimate.freq, values[:, i, j], label="actual")
+            ax.fill_between(estimate.freq, values[:, i, j] - 1.96 * std[:, i, j],
+                            values[:, i, j] + 1.96 * std[:, i, j], alpha=0.3)  # fmt: skip
+            if effective is not None:
+                ax.plot(estimate.freq, effective[row][:, i, j], "--", label="effective")
+            ax.set_title(f"{name}{label} ({unit})")
+            ax.grid(True, alpha=0.3)
+            if row == 1:
+                ax.set_xlabel("frequency (Hz)")
+    axes[0, 0].legend()
+    return fig
+
+
+def add_two_axis_options(parser: argparse.ArgumentParser) -> None:
+    """The options of ``amb-fast run --two-axis`` (the lead adds them to the ``run`` parser)."""
+    group = parser.add_argument_group("two axes (with --two-axis)")
+    group.add_argument("--two-axis", action="store_true", help="identify the 2x2 K, C of a two-axis rig")
+    for name, unit in (("kxy", "N/m"), ("kyx", "N/m"), ("cxy", "N s/m"), ("cyx", "N s/m")):
+        group.add_argument(f"--{name}", type=float, default=0.0, help=f"process cross coefficient, {unit}")
+    group.add_argument("--sensor-angle", type=float, default=0.0, help="probe rotation, rad")
+    group.add_argument("--cross-kp", type=float, default=0.0, help="cross-feedback kp (A/m) on both off-diagonals")
+
+
+def run_two_axis(
+    args: argparse.Namespace, rig: Rig, pid: AnyController, excitation: Multisine | None = None
+) -> Estimate2:
+    """``amb-fast run --two-axis``: both axes ``rig`` under ``pid`` (cross feedback ``--cross-kp``), the
+    process and probe angle from the options; prints the margins and the 2x2 K and C at ``--at``, and
+    writes ``--save`` (.csv or .npz) and ``--figure`` (.png) when the run parser has them."""
+    two = TwoAxisRig(x=rig, y=rig, kxy=args.kxy, kyx=args.kyx, cxy=args.cxy, cyx=args.cyx,
+                     sensor_angle=args.sensor_angle)  # fmt: skip
+    controller: Sequence[Any] = [[pid, None], [None, pid]]
+    if args.cross_kp:
+        cross = PID(kp=args.cross_kp, ki=0.0, kd=0.0, fs=pid.fs, delay=pid.delay)
+        controller = [[pid, cross], [cross, pid]]
+    sphs = excitation or schroeder_multisine(f0=1.0, f_max=200.0, fs=pid.fs)
+    options = {name: getattr(args, name) for name in ("periods", "settle_periods", "seed") if hasattr(args, name)}
+    est = run_experiment(two, controller, sphs, **options)
+    margin = stability_margin(two, controller)
+    print(f"stability margin    largest singular value of S: {margin.peak:.3f} ({margin.peak_db:.1f} dB) at "
+          f"{margin.frequency:.1f} Hz, zone {margin.zone}; per axis |S_xx| {margin.x.peak:.3f} (zone {margin.x.zone}), "
+          f"|S_yy| {margin.y.peak:.3f} (zone {margin.y.zone})")  # fmt: skip
+    print(summary2(est, getattr(args, "at", (10.0, 40.0, 100.0, 200.0))))
+    if getattr(args, "save", None):
+        save_estimate2(est, args.save)
+        print(f"wrote {args.save}")
+    if getattr(args, "figure", None):
+        figure = plot_coefficients2(est, effective=effective_coefficients(two, controller, est.freq))
+        atomic_write(args.figure, lambda p: figure.savefig(p, dpi=120, format=Path(args.figure).suffix.lstrip(".")))
+        print(f"wrote {args.figure}")
+    return est
+
+
+def save_estimate2(est: Estimate2, path: Path) -> None:
+    """A two-axis estimate as CSV (one row per line, units in the header) or .npz."""
+    columns: dict[str, Any] = {"freq_Hz": est.freq}
+    for name, values, unit in (("k", est.k, "N_per_m"), ("c", est.c, "Ns_per_m"), ("k_std", est.k_std, "N_per_m"),
+                               ("c_std", est.c_std, "Ns_per_m")):  # fmt: skip
+        for i, a in enumerate("xy"):
+            for j, b in enumerate("xy"):
+                columns[f"{name.replace('_std', '')}{a}{b}{'_std' if 'std' in name else ''}_{unit}"] = values[:, i, j]
+    path = Path(path)
+    if path.suffix.lower() == ".csv":
+        table = np.column_stack(list(columns.values()))
+        atomic_write(path, lambda p: np.savetxt(p, table, delimiter=",", header=",".join(columns), comments="",
+                                                fmt="%.10g"))  # fmt: skip
+    elif path.suffix.lower() == ".npz":
+        atomic_write(path, lambda p: np.savez(p, **columns))
+    else:
+        raise ValueError(f"save path must end in .csv or .npz, got {str(path)!r}")
+
+
+def summary2(est: Estimate2, at: Sequence[float] = (10.0, 40.0, 100.0, 200.0)) -> str:
+    """A text table of the 2x2 K and C at the lines nearest ``at`` (Hz)."""
+    out = [f"{'f (Hz)':>8} " + " ".join(f"{'k' + a + b + ' (N/m)':>14}" for a in "xy" for b in "xy")
+           + " " + " ".join(f"{'c' + a + b + ' (Ns/m)':>14}" for a in "xy" for b in "xy")]  # fmt: skip
+    for f in at:
+        j = int(np.argmin(np.abs(est.freq - f)))
+        out.append(f"{est.freq[j]:8.1f} " + " ".join(f"{v:14.6g}" for v in est.k[j].ravel()) + " "
+                   + " ".join(f"{v:14.6g}" for v in est.c[j].ravel()))  # fmt: skip
+    return "\n".join(out)
