@@ -1,6 +1,12 @@
 from __future__ import annotations
 
-import numpy as np
+import os
+
+# Small matrix calls (expm, solve) run many times over: one BLAS thread is faster than two on a loaded
+# two-core machine, where OpenBLAS's threads made them up to 100x slower. Set before numpy loads.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
 import pytest
 
 import amb_fast as af

@@ -18,7 +18,8 @@ ROWS = [
     )
 ]
 CLASSES = {"ValueError": ValueError, "OverflowError": OverflowError, "UnstableLoopError": af.UnstableLoopError,
-           "TouchdownError": af.TouchdownError}  # fmt: skip
+           "TouchdownError": af.TouchdownError, "NoExcitationError": af.NoExcitationError, "TypeError": TypeError,
+           "OSError": OSError}  # fmt: skip
 
 
 def test_the_table_is_there() -> None:

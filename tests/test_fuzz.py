@@ -98,7 +98,9 @@ def test_identify_on_arbitrary_recordings(periods, extra, f0, settle, bad, short
     period = int(4000.0 / f0)
     n = periods * period + extra
     rng = np.random.default_rng(n)
-    force, displacement = rng.standard_normal(n), rng.standard_normal(n)
+    # An excited force (every line to f_max) and a displacement of noise at a plausible size (m).
+    one = af.schroeder_multisine(f0=f0, f_max=100.0).samples
+    force, displacement = np.resize(one, n), 1e-6 * rng.standard_normal(n)
     kept = n - (n - settle * period) % period if n >= settle * period else n  # whole periods are used
     if bad is not None and n:
         where = int(bad[1] * (n - 1))

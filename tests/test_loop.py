@@ -9,7 +9,7 @@ import pytest
 from scipy import signal
 
 import amb_fast as af
-from amb_fast import reference
+from amb_fast import _core, reference
 from conftest import ALL_LAGS, GAINS
 
 TOL = 1e-10  # relative to the largest value of each channel
@@ -75,5 +75,7 @@ def test_threads_give_the_serial_result(lagged_rig, pid, rng) -> None:
 
 def test_unstable_loop_raises_instead_of_returning_inf(lagged_rig) -> None:
     too_soft = af.PID(kp=500.0, ki=0.0, kd=5.0)  # Kiy kp < -Kyy: negative net stiffness
-    with pytest.raises(OverflowError, match="non-finite.*unstable.*at sample"):
-        af.simulate(lagged_rig, too_soft, np.ones(40_000))
+    with pytest.raises(af.UnstableLoopError, match="closed loop is unstable with kp=500.0"):
+        af.simulate(lagged_rig, too_soft, np.ones(40_000))  # refused before simulating, like run_experiment
+    with pytest.raises(OverflowError, match="non-finite.*unstable.*at sample"):  # the core's own check stays
+        _core.simulate(lagged_rig._to_core(), too_soft._to_core(), np.ones(40_000), 0)

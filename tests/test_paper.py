@@ -20,6 +20,18 @@ def study():
     return paper_study()
 
 
+@pytest.fixture(scope="module")
+def noise_free_study():
+    return paper_study(rig=replace(af.Rig.paper(), sensor_noise=0.0, force_noise=0.0))
+
+
+# Observation 3.2.1-f is a 0.01 % change of k near resonance across the Ki family, about the standard
+# error the noise leaves there: it holds on the noise-free rig and on 17 of 20 noise seeds (2026-2045,
+# the current noise streams and the steady start; 2026 among them, 14 of 20 when settling from rest).
+# Requiring it on a chosen seed would only hide that it is noise-sensitive.
+NOISE_SENSITIVE = {"3.2.1-f"}
+
+
 def test_paper_baseline_is_stable_for_each_gain_from_two_thirds_to_one_and_a_half() -> None:
     rig, pid = af.Rig.paper(), af.PID.paper()
     for name in ("kp", "ki", "kd"):
@@ -28,10 +40,16 @@ def test_paper_baseline_is_stable_for_each_gain_from_two_thirds_to_one_and_a_hal
     assert rig.kiy * pid.kp * 0.67 + rig.kyy > 0  # positive net stiffness at the softest kp
 
 
-def test_every_claim_holds_on_the_paper_study(study) -> None:
-    results = study.claims()
+def test_every_claim_holds_on_the_noise_free_paper_study(noise_free_study) -> None:
+    results = noise_free_study.claims()
     assert len(results) == 14
     assert [c.id for c in results if not c.reproduced] == []
+
+
+def test_every_claim_but_the_noise_sensitive_one_holds_on_the_paper_study(study) -> None:
+    results = study.claims()
+    assert len(results) == 14
+    assert {c.id for c in results if not c.reproduced} <= NOISE_SENSITIVE
 
 
 def reversed_family(data: dict) -> dict:
@@ -51,7 +69,9 @@ FAMILY_CHECKS = {
 
 
 @pytest.mark.parametrize("check", sorted(FAMILY_CHECKS))
-def test_family_checks_fail_when_the_trend_is_reversed(study, check) -> None:
+def test_family_checks_fail_when_the_trend_is_reversed(study, noise_free_study, check) -> None:
+    if check == "ki_raises_stiffness_near_resonance_marginally":  # 3.2.1-f: see NOISE_SENSITIVE
+        study = noise_free_study
     family, arguments = FAMILY_CHECKS[check]
     data = study.family_data()[family]
     function = getattr(claims, check)
@@ -114,10 +134,13 @@ def test_paper_command_end_to_end(tmp_path) -> None:
         width, height = png_size(out / name)
         assert width >= 600 and height >= 500 and (out / name).stat().st_size > 20_000, name
     report = (out / "claims.md").read_text()
-    for claim in paper_study().claims():
+    results = paper_study().claims()
+    for claim in results:
         assert f"| {claim.id} |" in report
-    assert "14 of 14 observations reproduced" in report
-    assert "14 of 14 observations reproduced" in done.stdout
+    reproduced = sum(c.reproduced for c in results)
+    assert reproduced >= 14 - len(NOISE_SENSITIVE)
+    assert f"{reproduced} of 14 observations reproduced" in report
+    assert f"{reproduced} of 14 observations reproduced" in done.stdout
     actual = np.loadtxt(out / "actual.csv", delimiter=",", skiprows=1)
     assert actual.shape == (200, 9)
     for gain in ("ki", "kd", "kp"):
@@ -131,7 +154,8 @@ def test_run_sweep_and_identify_commands(tmp_path) -> None:
                    "--figure", "est.png", cwd=tmp_path)  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert "ISO 14839-3 zone" in done.stdout and "natural frequency" in done.stdout
-    assert np.loadtxt(tmp_path / "est.csv", delimiter=",", skiprows=1).shape == (200, 10)
+    saved = af.load_estimate(tmp_path / "est.csv")
+    assert saved.freq.size == 200 and saved.meta["controller"]["kp"] == 2600.0 and saved.meta["seed"] == 2026
     png_size(tmp_path / "est.png")
 
     done = run_cli("sweep", "--kp", "2000:2800:3", "--kd", "2,4", "--periods", "3", "--out", "s.npz", cwd=tmp_path)
@@ -145,8 +169,8 @@ def test_run_sweep_and_identify_commands(tmp_path) -> None:
     done = run_cli("identify", "rec.csv", "--settle-periods", "2", "--out", "ident", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert "100 lines from 1 to 100 Hz" in done.stdout
-    table = np.loadtxt(tmp_path / "ident" / "estimate.csv", delimiter=",", skiprows=1)
-    assert table.shape == (100, 10)
+    saved = af.load_estimate(tmp_path / "ident" / "estimate.csv")
+    assert saved.freq.size == 100 and saved.meta["source"] == "identify" and saved.meta["settle_periods"] == 2
     png_size(tmp_path / "ident" / "estimate.png")
 
 
@@ -158,7 +182,7 @@ def test_run_sweep_and_identify_commands(tmp_path) -> None:
         (["run", "--f0", "3"], "fs/f0 must be a whole number"),
         (["identify", "missing.csv"], "path must be an existing file"),
         (["sweep", "--periods", "3"], "give at least one of --kp, --ki, --kd"),
-        (["sweep", "--kp", "2000", "--out", "x.txt"], "path must end in .nc or .npz"),
+        (["sweep", "--kp", "2000", "--out", "x.txt"], "--out must end in .nc, .npz, .csv, got 'x.txt'"),
     ],
 )
 def test_user_mistakes_get_one_line_errors(tmp_path, args, message) -> None:

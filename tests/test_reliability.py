@@ -42,7 +42,11 @@ def test_saturation_is_counted_flagged_and_warned(sphs) -> None:
         est = af.run_experiment(rig, pid, sphs, settle_periods=2, periods=3)
     assert est.saturated and est.saturated_samples > 0
     # The count is what the current trace shows at the limit in the recorded periods.
-    trace = af.simulate(rig, pid, np.tile(sphs.samples, 5))
+    with (
+        pytest.warns(UserWarning, match="past the air gap"),  # 20 mA cannot hold it: it drifts off, and is flagged
+        pytest.warns(UserWarning, match="amplifier saturated: the current reached its limit 0.02 A"),
+    ):
+        trace = af.simulate(rig, pid, np.tile(sphs.samples, 5))
     recorded = trace.current[2 * sphs.period_samples :]
     assert est.saturated_samples == int(np.sum(np.abs(recorded) == 0.02))
     quiet = af.run_experiment(af.Rig(), pid, sphs, settle_periods=2, periods=3)
@@ -51,7 +55,12 @@ def test_saturation_is_counted_flagged_and_warned(sphs) -> None:
     result = af.sweep(rig, pid, sphs, kp=[2000.0, 2400.0], periods=3, settle_periods=2)
     assert list(result.status) == ["saturated", "saturated"]
     assert np.all(np.isnan(result.k))
-    assert af.identify(trace.force, trace.displacement, fs=4000.0, f0=2.0, mass=0.92).saturated_samples is None
+    with (  # it drifted off: both implausibility checks say so
+        pytest.warns(UserWarning, match="displacement amplitude .* is above 10 mm"),
+        pytest.warns(UserWarning, match="median [|]F/Y[|] is"),
+    ):
+        est = af.identify(trace.force, trace.displacement, fs=4000.0, f0=2.0, mass=0.92)
+    assert est.saturated_samples is None
 
 
 def test_eight_threads_give_the_serial_results(sphs) -> None:
@@ -61,7 +70,7 @@ def test_eight_threads_give_the_serial_results(sphs) -> None:
     calls = {
         "simulate": lambda: af.simulate(rig, pid, force, seed=4).displacement,
         "run_experiment": lambda: af.run_experiment(rig, pid, sphs, seed=4, periods=4).H,
-        "identify": lambda: af.identify(force, np.sin(np.arange(force.size)), fs=4000.0, f0=2.0, mass=0.92).H,
+        "identify": lambda: af.identify(force, 1e-5 * np.sin(np.arange(force.size)), fs=4000.0, f0=2.0, mass=0.92).H,
         "sweep": lambda: af.sweep(rig, pid, sphs, kp=[2200.0, 2600.0], seed=4, periods=3, workers=1).H,
         "predict": lambda: af.predict(rig, pid, sphs.freq, kp=np.linspace(2000, 3000, 50)),
     }
@@ -101,7 +110,7 @@ MEMORY_SCRIPT = textwrap.dedent(
     pid = af.PID(kp=2400.0, ki=10000.0, kd=3.0)
     sphs = af.schroeder_multisine()
     force = np.tile(sphs.samples, 2500)                     # 10^7 samples
-    displacement = np.random.default_rng(0).standard_normal(force.size)
+    displacement = 1e-6 * np.random.default_rng(0).standard_normal(force.size)
     af.run_experiment(rig, pid, sphs, periods=3)            # warm-up: code, FFT plans
     af.identify(force[:40000], displacement[:40000], fs=4000.0, f0=1.0, mass=0.92)
     for name, call in [
@@ -123,7 +132,8 @@ def test_long_experiments_and_records_keep_memory_bounded() -> None:
     (160 MB given) each raise the peak resident memory by less than 50 MB."""
     done = subprocess.run([sys.executable, "-c", MEMORY_SCRIPT], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
-    growth = {name: float(mb) for name, mb in (line.split() for line in done.stdout.strip().splitlines())}
+    lines = [line.split() for line in done.stdout.splitlines()]  # an editable install may print build lines
+    growth = {f[0]: float(f[1]) for f in lines if len(f) == 2 and f[0] in ("control", "experiment", "identify")}
     assert growth.pop("control") > 90  # the measurement sees a temporary 100 MB array
     assert set(growth) == {"experiment", "identify"}
     for name, megabytes in growth.items():

@@ -1,6 +1,11 @@
 """amb_fast: simulate and identify a digitally controlled active magnetic bearing.
 
 SI units throughout; frequencies in Hz. See ``docs/model.md`` and the README.
+
+It implements the experiment of the paper cited in :data:`CITATION` (the one-axis electromagnetic
+suspension identified with Schroeder-phased harmonic sequences); ``Rig.paper()`` / ``PID.paper()`` are
+that rig, while ``Rig()`` and ``PID(...)`` are the bare model (no lags, no noise; delay 1) that tests
+compare against exact answers: the README's "Defaults" table lists both side by side.
 """
 
 from __future__ import annotations
@@ -15,7 +20,7 @@ except ImportError as error:  # pragma: no cover - only without a built extensio
         "from the project root (it compiles the C++ core), not by putting python/ on the path."
     ) from error
 
-from ._errors import TouchdownError, UnstableLoopError
+from ._errors import NoExcitationError, TouchdownError, UnstableLoopError
 from ._excitation import Multisine, schroeder_multisine
 from ._experiment import Estimate, UnexcitedLines, identify, run_experiment
 from ._linear import (
@@ -28,9 +33,9 @@ from ._linear import (
     stability_margin,
 )
 from ._params import PID, Rig
-from ._recording import Recording, load_recording, save_recording
 from ._simulate import Trace, simulate
 from ._sweep import SweepResult, load_sweep, sweep
+from .calibration import Design, RigFit, design_controller, fit_rig
 from .controllers import (
     Controller,
     gain,
@@ -43,8 +48,10 @@ from .controllers import (
     second_order,
     series,
 )
+from .io import Recording, load_estimate, load_recording, save_recording
+from .two_axis import Estimate2, TwoAxisRig, plot_coefficients2
 
-_PLOTS = ("plot_actual", "plot_coefficients", "plot_effective", "plot_estimate", "plot_family")
+_PLOTS = ("plot_actual", "plot_coefficients", "plot_effective", "plot_estimate", "plot_family", "plot_overlay")
 
 
 def __getattr__(name: str):  # noqa: ANN202 - figures load matplotlib (the optional extra) on first use
@@ -55,14 +62,28 @@ def __getattr__(name: str):  # noqa: ANN202 - figures load matplotlib (the optio
     raise AttributeError(f"module 'amb_fast' has no attribute {name!r}")
 
 
+CITATION = (
+    "amb_fast reproduces the paper kept beside the project as shared/paper/one-axis-em-suspension-stiffness-damping.txt"
+    " (sections 2-3, Figs. 4-10): a one-axis electromagnetic suspension under digital PID control, its actual "
+    "stiffness and damping estimated in the frequency domain with Schroeder phased harmonic sequences (SPHS). The "
+    "extracted text carries no title page, authors or venue (its pages are numbered from 424): cite the original "
+    "publication. It builds on R. D. Williams, F. J. Keith, P. E. Allaire, 'Digital control of active magnetic "
+    "bearings', IEEE Transactions on Industrial Electronics 37(1), 19-27 (1990), its reference [1]."
+)
+
 try:
     __version__ = version("amb_fast")
 except PackageNotFoundError:  # pragma: no cover
     __version__ = "unknown"
 
 __all__ = [
+    "CITATION",
     "PID",
     "Controller",
+    "Design",
+    "RigFit",
+    "design_controller",
+    "fit_rig",
     "gain",
     "lead_lag",
     "load_controller",
@@ -73,13 +94,16 @@ __all__ = [
     "second_order",
     "series",
     "Estimate",
+    "Estimate2",
     "Multisine",
+    "NoExcitationError",
     "Recording",
     "Rig",
     "StabilityMargin",
     "SweepResult",
     "TouchdownError",
     "Trace",
+    "TwoAxisRig",
     "UnexcitedLines",
     "UnstableLoopError",
     "__version__",
@@ -87,13 +111,16 @@ __all__ = [
     "closed_loop_poles",
     "effective_coefficients",
     "identify",
+    "load_estimate",
     "load_recording",
     "load_sweep",
     "plot_actual",
     "plot_coefficients",
+    "plot_coefficients2",
     "plot_effective",
     "plot_estimate",
     "plot_family",
+    "plot_overlay",
     "predict",
     "run_experiment",
     "save_recording",

@@ -1,5 +1,6 @@
 """Type stubs for the compiled core (cpp/bindings). Units as in the Python layer: SI, Hz."""
 
+from collections.abc import Sequence
 from enum import Enum
 
 import numpy as np
@@ -87,6 +88,9 @@ class SweepEstimates:
 def simulate(
     rig: Rig, controller: Controller, force: ArrayLike, seed: int = 0
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+def normal_noise(seed: int, chunks: Sequence[int], sigma: float = 1.0) -> np.ndarray: ...
+def xoshiro256pp(seed: int, n: int) -> np.ndarray: ...
+def line_spectrum(x: ArrayLike, bins: Sequence[int], method: str = "auto") -> tuple[np.ndarray, str]: ...
 def run_experiment(
     rig: Rig,
     controller: Controller,
@@ -126,3 +130,33 @@ class CancelToken:
     def cancel(self) -> None: ...
     @property
     def cancelled(self) -> bool: ...
+
+# Two axes (amb_fast.two_axis): the generic dense MIMO loop.
+def mimo_simulate(
+    M: ArrayLike,
+    Bf: ArrayLike,
+    Bn: ArrayLike,
+    C: ArrayLike,
+    Dn: ArrayLike,
+    transducer_pole: ArrayLike,
+    sensor_noise: ArrayLike,
+    force_noise: ArrayLike,
+    force: ArrayLike,
+    seed: int = 0,
+) -> tuple[np.ndarray, np.ndarray]: ...
+def mimo_experiments(
+    M: ArrayLike,
+    Bf: ArrayLike,
+    Bn: ArrayLike,
+    C: ArrayLike,
+    Dn: ArrayLike,
+    transducer_pole: ArrayLike,
+    sensor_noise: ArrayLike,
+    force_noise: ArrayLike,
+    period_forces: ArrayLike,
+    settle_periods: int,
+    periods: int,
+    seeds: list[int],
+    steady_start: bool = True,
+    all_forces: bool = True,
+) -> tuple[np.ndarray, np.ndarray]: ...

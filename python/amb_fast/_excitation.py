@@ -151,7 +151,7 @@ def schroeder_multisine(
     """
     real("f0", f0, "Hz", positive=True)
     real("fs", fs, "Hz", positive=True)
-    real("rms", rms, "N", positive=True)
+    require(real("rms", rms, "N", positive=True) <= 1e12, "rms", rms, "at most 1e12 N (larger overflows the samples)")
     real("f_max", f_max, "Hz", positive=True)
     require(f0 <= f_max < fs / 2, "f_max", f_max, f"at least f0 ({f0} Hz) and below fs/2 ({fs / 2} Hz)")
     if seed is not None:

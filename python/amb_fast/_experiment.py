@@ -3,17 +3,19 @@
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
-from typing import Literal
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import _core
+from . import _checks, _core
+from ._dispatch import two_axis_aware, two_recordings_aware
 from ._excitation import Multisine, period_samples
 from ._linear import AnyController, core_controller, require_stable, settle_periods_for, settling_radius
 from ._params import Rig
-from ._validate import integer, real, require, seed_value, series
+from ._validate import integer, optional_positive, real, require, rig_and_controller, seed_value, series
 
 
 @dataclass(frozen=True)
@@ -70,6 +72,14 @@ class Estimate:
     blocks : int
         Independent groups behind the standard errors: every period up to 63 periods, else batch
         means of ``periods // 32`` consecutive periods (32 to 63 of them).
+    weak : ndarray of bool or None
+        Per line: its force or displacement is under 10x the noise level, so noise weighs on it. The
+        noise level is the median at the unexcited lines; :func:`identify` with every line excited uses
+        the harmonics above the band, or the period-to-period scatter. (``run_experiment`` with no
+        unexcited line: all False.)
+    meta : dict
+        What produced it: ``source`` ("run_experiment" or "identify"), the rig, the controller, the seed,
+        fs, f0, mass, settle_periods. Saved with the estimate (:meth:`save`).
     """
 
     freq: np.ndarray
@@ -87,11 +97,39 @@ class Estimate:
     periods: int
     blocks: int
     saturated_samples: int | None = None
+    weak: np.ndarray | None = None
+    meta: dict[str, Any] = field(default_factory=dict, compare=False)
 
     @property
     def saturated(self) -> bool:
         """Whether the amplifier clipped during the recorded periods."""
         return bool(self.saturated_samples)
+
+    def save(self, path: str | Path) -> Path:
+        """Write atomically to ``.csv`` (a metadata header and a SHA-256) or ``.nc`` (NetCDF, checksummed);
+        :func:`amb_fast.load_estimate` reads it back, unexcited lines and metadata included."""
+        from .io import save_estimate
+
+        return save_estimate(self, path)
+
+    def to_xarray(self):  # noqa: ANN201 - xarray is optional
+        """An ``xarray.Dataset`` over ``freq`` (and ``unexcited_freq``) with units; metadata in ``attrs``."""
+        from .io._results import estimate_to_xarray
+
+        return estimate_to_xarray(self)
+
+    def to_dataframe(self):  # noqa: ANN201 - pandas is optional
+        """A ``pandas.DataFrame``, one row per line (excited and unexcited), units in the column names."""
+        from .io._results import estimate_to_dataframe
+
+        return estimate_to_dataframe(self)
+
+    def to_ross(self, n: int, *, smoothed: bool = False, **kwargs: Any) -> Any:
+        """This estimate as a symmetric ``ross.BearingElement`` at node ``n``: k, c on both axes, no cross
+        terms, over the lines in rad/s (see :func:`amb_fast.two_axis.to_ross`; needs the ``ross`` extra)."""
+        from .two_axis import to_ross
+
+        return to_ross(self, n, smoothed=smoothed, **kwargs)
 
 
 def _plan(harmonics: np.ndarray, period: int) -> tuple[_core.LinePlan, np.ndarray]:
@@ -103,8 +141,16 @@ def _plan(harmonics: np.ndarray, period: int) -> tuple[_core.LinePlan, np.ndarra
 
 
 def _estimate(
-    raw: _core.LineEstimate, harmonics: np.ndarray, unexcited: np.ndarray, f0: float, saturated: int | None = None
+    raw: _core.LineEstimate,
+    harmonics: np.ndarray,
+    unexcited: np.ndarray,
+    f0: float,
+    saturated: int | None = None,
+    meta: dict[str, Any] | None = None,
+    weak: np.ndarray | None = None,
 ) -> Estimate:
+    if weak is None:
+        weak = _checks.weak_lines(raw.force, raw.displacement, raw.unexcited_force, raw.unexcited_displacement)
     return Estimate(
         freq=harmonics * f0,
         H=raw.H,
@@ -121,6 +167,8 @@ def _estimate(
         periods=int(raw.periods),
         blocks=int(raw.blocks),
         saturated_samples=saturated,
+        weak=weak,
+        meta=meta or {},
     )
 
 
@@ -149,6 +197,7 @@ def automatic_settle(rig: Rig, controller: AnyController, radius: float, period:
     return periods
 
 
+@two_axis_aware
 def run_experiment(
     rig: Rig,
     controller: AnyController,
@@ -182,6 +231,7 @@ def run_experiment(
     platform reaches its clearance. Amplifier saturation during the recorded periods is counted in
     ``Estimate.saturated_samples`` and warned about.
     """
+    rig_and_controller(rig, controller, "run_experiment")
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
     pid = controller
     require(excitation.fs == pid.fs, "excitation.fs", excitation.fs, f"equal to the controller's fs ({pid.fs} Hz)")
@@ -195,6 +245,7 @@ def run_experiment(
     settle_periods = integer("settle_periods", settle_periods, 0)
     harmonics = excitation.harmonics
     plan, unexcited = _plan(harmonics, period)
+    seed = seed_value(seed)
     raw = _core.run_experiment(
         rig._to_core(),
         core_controller(pid),
@@ -202,7 +253,7 @@ def run_experiment(
         settle_periods,
         periods,
         plan,
-        seed_value(seed),
+        seed,
         window,
         start == "steady",
     )
@@ -213,9 +264,12 @@ def run_experiment(
             "flagged (Estimate.saturated) and is not that of the linear loop",
             stacklevel=2,
         )
-    return _estimate(raw, harmonics, unexcited, excitation.f0, saturated=int(raw.saturated_samples))
+    meta = {"source": "run_experiment", "rig": rig, "controller": pid, "seed": seed, "fs": excitation.fs,
+            "f0": excitation.f0, "mass": rig.mass, "settle_periods": settle_periods}  # fmt: skip
+    return _estimate(raw, harmonics, unexcited, excitation.f0, saturated=int(raw.saturated_samples), meta=meta)
 
 
+@two_recordings_aware
 def identify(
     force: ArrayLike,
     displacement: ArrayLike,
@@ -227,6 +281,7 @@ def identify(
     lines: ArrayLike | None = None,
     settle_periods: int = 0,
     median_window: int = 5,
+    clearance: float | None = None,
 ) -> Estimate:
     """Estimate k(f), c(f) from a recording of force (N) and displacement (m) sampled at ``fs`` (Hz).
 
@@ -235,7 +290,15 @@ def identify(
     a warning. ``mass`` (kg) is the known system mass of paper eq. 9.
 
     Excited lines: ``lines`` (Hz, multiples of f0), else every harmonic of ``f0`` up to ``f_max``; with
-    neither given, the harmonics whose period-averaged force amplitude exceeds 1e-3 of the largest.
+    neither given, the harmonics whose period-averaged force amplitude exceeds 1e-3 of the largest and
+    10x the median of all harmonics (so pass ``lines`` or ``f_max`` when over half of them are excited).
+
+    Refuses (``ValueError``) a force with no excitation at the chosen lines: zero, constant, or not
+    clearly (3x) above the noise floor at the unexcited lines. Flags lines under 10x that floor
+    (``Estimate.weak``). Warns (``UserWarning``) when the first recorded period differs from the last
+    beyond the period-to-period scatter (a start transient: pass ``settle_periods``), and for magnitudes
+    that suggest a unit mistake: a median stiffness outside 1e2-1e9 N/m, a displacement amplitude above
+    10 mm (or above ``clearance``, m, when given), force and displacement swapped.
     """
     force, displacement = series("force", force), series("displacement", displacement)
     require(force.size == displacement.size, "displacement length", displacement.size, f"{force.size} like force")
@@ -258,13 +321,34 @@ def identify(
         force, displacement = force[:whole], displacement[:whole]
     require((whole - start) // period >= 2, "periods after settling", (whole - start) // period,
             ">= 2 (standard errors need at least two)")  # fmt: skip
-    harmonics = _lines(force[start:], period, f0, fs, f_max, lines)
+    clearance = optional_positive("clearance", clearance, "m")
+    harmonics = _lines(force[start:], period, f0, fs, f_max, lines, offset=start)
     plan, unexcited = _plan(harmonics, period)
-    raw = _core.identify(force, displacement, settle_periods, plan, mass, fs, window)
-    return _estimate(raw, harmonics, unexcited, f0)
+    try:
+        raw = _core.identify(force, displacement, settle_periods, plan, mass, fs, window)
+    except ValueError:
+        for name, values in (("force", force), ("displacement", displacement)):
+            bad = np.flatnonzero(~np.isfinite(values))
+            if bad.size:  # the index in the whole recording, settle periods included
+                raise ValueError(f"{name} must be finite, got {float(values[bad[0]])!r} at sample {bad[0]}") from None
+        if np.ptp(force[start:]) == 0.0:  # no excitation explains the failure better than its consequence
+            raise _checks.NoExcitationError(f"force has no excitation at the chosen lines: it is zero or constant "
+                                            f"there ({force[start]:g} N)") from None  # fmt: skip
+        raise
+    force_noise = _checks.noise_levels(force[start:], period, harmonics, raw.unexcited_force)
+    _checks.require_excitation(raw.force, force_noise, offset=max(abs(force[start]), abs(force[-1])))
+    displacement_noise = _checks.noise_levels(displacement[start:], period, harmonics, raw.unexcited_displacement)
+    weak = _checks.weak_lines(raw.force, raw.displacement, force_noise, displacement_noise)
+    _checks.warn_transient(displacement[start:], period)
+    _checks.warn_implausible(raw.k, raw.H, displacement[max(start, whole - 16 * period) :], clearance)
+    meta = {"source": "identify", "rig": None, "controller": None, "seed": None, "fs": fs, "f0": f0, "mass": mass,
+            "settle_periods": settle_periods}  # fmt: skip
+    return _estimate(raw, harmonics, unexcited, f0, meta=meta, weak=weak)
 
 
-def _lines(force: np.ndarray, period: int, f0: float, fs: float, f_max: float | None, lines) -> np.ndarray:  # noqa: ANN001
+def _lines(
+    force: np.ndarray, period: int, f0: float, fs: float, f_max: float | None, lines, offset: int = 0
+) -> np.ndarray:  # noqa: ANN001, E501
     top = period // 2 - 1 if period % 2 == 0 else period // 2  # highest harmonic below Nyquist
     if f_max is not None:
         real("f_max", f_max, "Hz", positive=True)
@@ -287,6 +371,17 @@ def _lines(force: np.ndarray, period: int, f0: float, fs: float, f_max: float | 
     # Neither given: the lines the force actually excites (finite data assumed; the core checks).
     if not np.all(np.isfinite(force)):
         bad = int(np.flatnonzero(~np.isfinite(force))[0])
-        raise ValueError(f"force must be finite, got {force[bad]!r} at sample {bad}")
-    level = np.abs(np.fft.rfft(force.reshape(-1, period).mean(axis=0)))[1 : top + 1]
-    return np.flatnonzero(level > 1e-3 * level.max()) + 1
+        raise ValueError(
+            f"force must be finite, got {float(force[bad])!r} at sample {bad + offset}"
+        )  # in the recording
+    mean = force.reshape(-1, period).mean(axis=0)
+    if np.ptp(mean) == 0.0:
+        raise _checks.NoExcitationError(f"force has no excitation: it is constant ({mean[0]:g} N) after settling")
+    level = np.abs(np.fft.rfft(mean))[1 : top + 1]
+    found = _checks.detect_lines(level)
+    if found.size == 0:
+        raise _checks.NoExcitationError(
+            "force has no excitation: no harmonic of f0 stands clearly (10x) above the others; zero, constant or "
+            "pure-noise force, or pass lines= or f_max="
+        )
+    return found

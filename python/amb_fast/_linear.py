@@ -15,9 +15,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import expm
 
+from ._dispatch import two_axis_aware
 from ._errors import UnstableLoopError
 from ._params import PID, Rig
-from ._validate import require
+from ._validate import require, rig_and_controller
 
 if TYPE_CHECKING:
     from .controllers import Controller
@@ -165,6 +166,7 @@ def controller_matrices(controller: AnyController) -> tuple[np.ndarray, np.ndarr
     return A2, B2, C2, np.zeros((1, 1))
 
 
+@two_axis_aware
 def closed_loop(rig: Rig, controller: AnyController) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The linear loop as one discrete state space ``(A, B, C, D)`` with sample period ``1/fs``.
 
@@ -172,6 +174,7 @@ def closed_loop(rig: Rig, controller: AnyController) -> tuple[np.ndarray, np.nda
     plant's, then the controller's (see :func:`controller_matrices`). ``controller``: a :class:`PID`
     or any :class:`~amb_fast.Controller`.
     """
+    rig_and_controller(rig, controller, "closed_loop")
     Phi, Gamma, states = discrete_plant(rig, controller.fs)
     Ac, Bc, Cc, Dc = controller_matrices(controller)
     n, m = len(states), Ac.shape[0]
@@ -191,11 +194,13 @@ def closed_loop(rig: Rig, controller: AnyController) -> tuple[np.ndarray, np.nda
     return A, B, C, np.zeros((2, 1))
 
 
+@two_axis_aware
 def closed_loop_poles(rig: Rig, controller: AnyController) -> np.ndarray:
     """Poles of the linearised sampled-data loop in the z-plane (stable: all ``|z| < 1``).
 
     The equivalent continuous-time poles are ``log(z) * fs`` (rad/s).
     """
+    rig_and_controller(rig, controller, "closed_loop_poles")
     return np.linalg.eigvals(closed_loop(rig, controller)[0])
 
 
@@ -317,6 +322,7 @@ def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, z: np.ndarray) -> np.
     return np.einsum("on,fni->oif", C, X)
 
 
+@two_axis_aware
 def predict(
     rig: Rig,
     pid: AnyController,
@@ -337,6 +343,7 @@ def predict(
     array of shape (gain sets, len(freq)) for all of them at once: the plant's two responses are
     computed once and the controller, linear in its gains, is combined with them per gain set.
     """
+    rig_and_controller(rig, pid, "predict")
     f = _frequencies(freq, pid.fs)
     z = np.exp(2j * np.pi * f.ravel() / pid.fs)
     if kp is None and ki is None and kd is None:
@@ -407,8 +414,10 @@ def iso_zone(peak: float) -> str:
     return "A" if peak < 3 else "B" if peak < 4 else "C" if peak < 5 else "D"
 
 
+@two_axis_aware
 def sensitivity(rig: Rig, pid: AnyController, freq: ArrayLike) -> np.ndarray:
     """Sensitivity S = 1/(1 + L) with the loop broken at the controller output, at ``freq`` (Hz)."""
+    rig_and_controller(rig, pid, "sensitivity")
     f = _frequencies(freq, pid.fs)
     Phi, Gamma, states = discrete_plant(rig, pid.fs)
     sensor = np.zeros((1, len(states)))
@@ -420,8 +429,10 @@ def sensitivity(rig: Rig, pid: AnyController, freq: ArrayLike) -> np.ndarray:
     return (1.0 / (1.0 - plant * control)).reshape(f.shape)
 
 
+@two_axis_aware
 def stability_margin(rig: Rig, pid: AnyController, points: int = 20_000) -> StabilityMargin:
     """Peak of |S| over ``points`` log-spaced frequencies from 0.01 Hz to just below Nyquist."""
+    rig_and_controller(rig, pid, "stability_margin")
     require(isinstance(points, int) and points >= 2, "points", points, "a whole number >= 2")
     stable = bool(np.all(np.abs(closed_loop_poles(rig, pid)) < 1.0))
     if not stable:
@@ -466,6 +477,7 @@ def controller_response(controller: DesignController, freq: np.ndarray, *, discr
     return np.asarray(function(s), dtype=complex) * np.ones_like(s)
 
 
+@two_axis_aware
 def effective_coefficients(
     rig: Rig,
     controller: DesignController,

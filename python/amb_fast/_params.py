@@ -19,7 +19,23 @@ ForceLaw = Literal["linear", "nonlinear"]
 
 @dataclass(frozen=True)
 class Rig:
-    """The one-axis suspension of MODEL.md (defaults: the paper's rig).
+    """The one-axis suspension of MODEL.md.
+
+    ``Rig()`` is the bare model: the paper's m, Kyy, Kiy and bias current with no lags, no noise, no
+    mass loading, DC coupling and the linear force law (what tests compare with exact answers).
+    ``Rig.paper()`` is the paper's rig as simulated. Side by side (also in the README, "Defaults")::
+
+        field                 Rig()       Rig.paper()
+        mass, kyy, kiy        0.92 kg, -53.3 kN/m, 47.19 N/A in both
+        bias_current          0.65 A      0.65 A
+        amp_bandwidth         None        3000 Hz
+        eddy_bandwidth        None        2000 Hz
+        sensor_bandwidth      None        10000 Hz
+        mass_loading          0           0.06 kg
+        force_coupling_tau    None        1 s
+        sensor_noise          0           20e-9 m rms
+        force_noise           0           1e-3 N rms
+        force_law             linear      linear
 
     Parameters
     ----------
@@ -143,6 +159,15 @@ class Rig:
 @dataclass(frozen=True)
 class PID:
     """The digital PID controller of MODEL.md section 2.
+
+    ``PID(kp=..., ki=..., kd=...)`` has no derivative filter and a computation delay of one sample;
+    ``PID.paper()`` is the paper rig's baseline. Side by side (also in the README, "Defaults")::
+
+        field                 PID(kp, ki, kd)     PID.paper()
+        kp, ki, kd            required            2400 A/m, 20000 A/(m s), 3 A s/m
+        derivative_cutoff     None                1000 Hz
+        fs                    4000 Hz             4000 Hz
+        delay                 1 sample            0 samples
 
     Parameters
     ----------

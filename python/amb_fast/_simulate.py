@@ -2,16 +2,18 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import warnings
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
-from ._linear import AnyController, core_controller
+from ._dispatch import two_axis_aware
+from ._linear import AnyController, core_controller, require_stable
 from ._params import Rig
-from ._validate import seed_value, series
+from ._validate import rig_and_controller, seed_value, series
 
 
 @dataclass(frozen=True)
@@ -28,12 +30,15 @@ class Trace:
         Coil control current at kT, A.
     fs : float
         Sampling frequency, Hz.
+    meta : dict
+        The rig, the controller and the seed of the run (saved with the recording by :meth:`save`).
     """
 
     force: np.ndarray
     displacement: np.ndarray
     current: np.ndarray
     fs: float
+    meta: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def time(self) -> np.ndarray:
@@ -42,11 +47,12 @@ class Trace:
 
     def save(self, path: str | Path) -> None:
         """Write force and displacement as a recording (``.csv`` or ``.mat``), see :func:`load_recording`."""
-        from ._recording import save_recording
+        from .io import save_recording
 
-        save_recording(path, force=self.force, displacement=self.displacement, fs=self.fs)
+        save_recording(path, force=self.force, displacement=self.displacement, fs=self.fs, meta=self.meta)
 
 
+@two_axis_aware
 def simulate(rig: Rig, controller: AnyController, force: ArrayLike, *, seed: int | None = None) -> Trace:
     """Run the closed loop on a force sequence (N) sampled at the controller's ``fs``, from rest.
 
@@ -58,12 +64,33 @@ def simulate(rig: Rig, controller: AnyController, force: ArrayLike, *, seed: int
 
     Raises
     ------
+    UnstableLoopError
+        Before simulating, when the linearised loop has a pole on or outside the unit circle (like
+        :func:`run_experiment`).
+    TouchdownError
+        When the platform reaches its clearance (``Rig.clearance``; the air gap with the non-linear law).
+    OverflowError
+        If the state stops being finite anyway (the message gives the sample and the time).
     ValueError
         For bad parameters or a non-finite force sample (named, with its index).
-    OverflowError
-        If the state stops being finite (an unstable loop) or the platform leaves the air gap.
+
+    Warns (``UserWarning``) when the amplifier clipped the current command (``Rig.current_limit``), and
+    when the linear force law carried the platform past the magnets' air gap, where it does not hold.
     """
+    rig_and_controller(rig, controller, "simulate")
     force = series("force", force)
-    recorded, displacement, current = _core.simulate(rig._to_core(), core_controller(controller), force,
-                                                     seed_value(seed))  # fmt: skip
-    return Trace(force=recorded, displacement=displacement, current=current, fs=controller.fs)
+    require_stable(rig, controller)
+    seed = seed_value(seed)
+    recorded, displacement, current = _core.simulate(rig._to_core(), core_controller(controller), force, seed)
+    if rig.current_limit is not None and current.size and float(np.max(np.abs(current))) >= rig.current_limit:
+        clipped = int(np.count_nonzero(np.abs(current) >= rig.current_limit * (1 - 1e-12)))
+        warnings.warn(f"the amplifier saturated: the current reached its limit {rig.current_limit:g} A at {clipped} "
+                      "samples, so the loop was not linear there", stacklevel=2)  # fmt: skip
+    if rig.force_law == "linear" and rig.clearance is None and displacement.size:
+        peak = float(np.max(np.abs(displacement)))
+        if peak >= rig.gap:
+            warnings.warn(f"the displacement reached {peak:.3g} m, past the air gap {rig.gap:.3g} m of the magnets: "
+                          "the linear force law does not hold there (set Rig.clearance, or the non-linear law)",
+                          stacklevel=2)  # fmt: skip
+    meta = {"source": "simulate", "rig": rig, "controller": controller, "seed": seed}
+    return Trace(force=recorded, displacement=displacement, current=current, fs=controller.fs, meta=meta)

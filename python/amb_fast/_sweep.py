@@ -15,11 +15,19 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
+from ._dispatch import two_axis_aware
 from ._excitation import Multisine
 from ._experiment import _plan, _window, automatic_settle
-from ._linear import AnyController, core_controller, loop_poles, spectral_radius
+from ._linear import AnyController, core_controller, is_controller, loop_poles, spectral_radius
 from ._params import PID, Rig
-from ._validate import integer, require, seed_value
+from ._validate import integer, require, rig_and_controller, seed_value
+
+
+def _version() -> str:
+    from . import __version__
+
+    return __version__
+
 
 SWEPT = ("kp", "ki", "kd")  # the PID gains: swept together in closed form
 STATUS = ("ok", "unstable", "touchdown", "saturated")  # index = the core's PointStatus
@@ -40,6 +48,12 @@ def unit_of(name: str) -> str:
     return "Hz" if name.endswith("_freq") or name.endswith("_width") else ""
 
 
+# Labelled in Python: the core reports a linear-law point whose state overflowed as "touchdown" (it
+# reached an infinite clearance); without a clearance that is an overflow (saturation made it diverge).
+OVERFLOW = "overflow"
+STATUS_NAMES = (*STATUS, OVERFLOW)
+
+
 @dataclass(frozen=True)
 class SweepResult:
     """Estimates of every point of a sweep, in grid order.
@@ -58,7 +72,9 @@ class SweepResult:
         Shape (points, lines), as in :class:`Estimate` (N/m, N/m, N s/m, ...). NaN where status is not ok.
     status : ndarray of str
         "ok"; "unstable" (a linearised pole on or outside the unit circle, found before simulating);
-        "touchdown" (non-linear run reached the air gap); "saturated" (reserved: no saturation model yet).
+        "touchdown" (the platform reached its clearance, or the air gap with the non-linear law);
+        "saturated" (the amplifier clipped: ``Rig.current_limit``); "overflow" (a linear-law point whose
+        state stopped being finite, e.g. diverging under saturation, with no clearance to touch).
     settle_periods, seeds : ndarray
         What each point ran with: ``run_experiment(rig, pid_i, excitation, periods=periods,
         seed=int(seeds[i]))`` reproduces point i bit for bit.
@@ -133,18 +149,28 @@ class SweepResult:
                  "axes": json.dumps(list(self.axes))}  # fmt: skip
         return xr.Dataset(data, coords=coords, attrs=attrs)
 
+    def to_dataframe(self):  # noqa: ANN201 - pandas is optional
+        """A ``pandas.DataFrame``: one row per point and line (swapped gains, status, freq_Hz, estimates)."""
+        from .io._results import sweep_to_dataframe
+
+        return sweep_to_dataframe(self)
+
     def save(self, path: str | Path) -> None:
-        """Write to ``.nc`` (NetCDF via xarray and h5netcdf; H as real and imaginary parts) or ``.npz``."""
+        """Write atomically to ``.nc`` (NetCDF via xarray and h5netcdf; H as real and imaginary parts;
+        fletcher32 and a SHA-256 checked by :func:`load_sweep`) or ``.npz`` (zip CRC-32 per array)."""
+        from .io import atomic_path, write_netcdf
+
         path = Path(path)
         if path.suffix == ".nc":
             ds = self.to_xarray()
             ds["H_real"], ds["H_imag"] = ds.H.real, ds.H.imag
-            ds.drop_vars("H").assign(status=ds.status.astype(str)).to_netcdf(path, engine="h5netcdf")
+            write_netcdf(ds.drop_vars("H").assign(status=ds.status.astype(str)), path)
         elif path.suffix == ".npz":
             arrays = {name: getattr(self, name) for name in _ARRAYS}
             arrays |= {f"point_{k}": v for k, v in self.points.items()} | {f"axis_{k}": v for k, v in self.axes.items()}
             header = {"grid": self.grid, "periods": self.periods, "blocks": self.blocks, "meta": self.meta}
-            np.savez_compressed(path, header=json.dumps(header), **arrays)
+            with atomic_path(path) as target, open(target, "wb") as handle:
+                np.savez_compressed(handle, header=json.dumps(header), **arrays)
         else:
             raise ValueError(f"path must end in .nc or .npz, got {str(path)!r}")
 
@@ -157,19 +183,19 @@ def load_sweep(path: str | Path) -> SweepResult:
     """Read a sweep written by :meth:`SweepResult.save` (``.nc`` or ``.npz``)."""
     path = Path(path)
     require(path.is_file(), "path", str(path), "an existing file")
+    from .io import read_netcdf
+    from .io._results import read_npz
+
     if path.suffix == ".npz":
-        with np.load(path, allow_pickle=False) as f:
-            header = json.loads(str(f["header"]))
-            arrays = {name: f[name] for name in _ARRAYS}
-            points = {k[6:]: f[k] for k in f.files if k.startswith("point_")}
-            axes = {k[5:]: f[k] for k in f.files if k.startswith("axis_")}
+        f = read_npz(path)  # a damaged member fails its CRC-32 and is refused
+        header = json.loads(str(f["header"]))
+        arrays = {name: f[name] for name in _ARRAYS}
+        points = {k[6:]: f[k] for k in f if k.startswith("point_")}
+        axes = {k[5:]: f[k] for k in f if k.startswith("axis_")}
         return SweepResult(points=points, axes=axes, **arrays, **header)
     if path.suffix != ".nc":
         raise ValueError(f"path must end in .nc or .npz, got {str(path)!r}")
-    import xarray as xr
-
-    with xr.open_dataset(path, engine="h5netcdf") as ds:
-        ds = ds.load()
+    ds = read_netcdf(path)  # refuses a file whose checksums do not match
     grid = ds.attrs["grid"]
     names = json.loads(ds.attrs["axes"]) if "axes" in ds.attrs else [n for n in SWEPT if n in ds.coords]
     n_dims = len(names) if grid == "product" else 1
@@ -315,11 +341,31 @@ def _run_chunk(
     if rows.size:
         masses = {models[j][0].mass for j in rows}
         require(len(masses) == 1, "mass", sorted(masses), "the same at every point of a sweep (kg)")
-        core = _core.run_sweep(excitation.samples, [models[j][0]._to_core() for j in rows],
-                               [core_controller(models[j][1]) for j in rows], out["settle_periods"][rows],
-                               seeds[rows], periods, plan, window, workers, start == "steady", cancel)  # fmt: skip
-        for name in _CORE_FIELDS:
-            out[name][rows] = np.asarray(getattr(core, name))
+
+        def core_call(pick: np.ndarray):  # noqa: ANN202
+            at = rows[pick]
+            return _core.run_sweep(excitation.samples, [models[j][0]._to_core() for j in at],
+                                   [core_controller(models[j][1]) for j in at], out["settle_periods"][at],
+                                   seeds[at], periods, plan, window, workers, start == "steady", cancel)  # fmt: skip
+
+        everything = np.arange(rows.size)
+        try:
+            parts = [(everything, core_call(everything))]
+        except (ValueError, OverflowError):  # a point diverged (e.g. under saturation): find it, flag it
+            parts = []
+            for j in everything:
+                try:
+                    parts.append((everything[j : j + 1], core_call(everything[j : j + 1])))
+                except (ValueError, OverflowError):
+                    out["status"][rows[j]] = STATUS_NAMES.index(OVERFLOW)
+        for pick, core in parts:
+            for name in _CORE_FIELDS:
+                out[name][rows[pick]] = np.asarray(getattr(core, name))
+        for j in rows:  # no clearance to touch on the linear law: the state overflowed
+            point_rig = models[j][0]
+            unbounded = point_rig.force_law == "linear" and point_rig.clearance is None
+            if out["status"][j] == STATUS.index("touchdown") and unbounded:
+                out["status"][j] = STATUS_NAMES.index(OVERFLOW)
     return out
 
 
@@ -338,6 +384,7 @@ def _progress_bar(progress: bool | None, total: int):  # noqa: ANN202
     return tqdm(total=total, unit="point", desc="sweep")
 
 
+@two_axis_aware
 def sweep(
     rig: Rig | Factory,
     controller: AnyController | Multisine,
@@ -382,12 +429,13 @@ def sweep(
     require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
     factory: Factory | None = None
     base_controller: Any
-    if callable(rig) and not isinstance(rig, Rig):
+    if callable(rig) and not isinstance(rig, Rig) and not is_controller(rig):
         require(excitation is None, "excitation", excitation, "given once: sweep(factory, excitation, **axes)")
         factory, excitation, base_rig, base_controller = rig, controller, None, None  # type: ignore[assignment]
     else:
-        require(isinstance(rig, Rig), "rig", type(rig).__name__, "a Rig (or a factory callable)")
-        base_rig, base_controller = rig, controller  # type: ignore[assignment]
+        rig_and_controller(rig, controller, "sweep")
+        assert isinstance(rig, Rig)
+        base_rig, base_controller = rig, controller
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
     assert isinstance(excitation, Multisine)
     if base_controller is not None:
@@ -402,7 +450,8 @@ def sweep(
 
     if settle_periods is not None:
         settle_periods = integer("settle_periods", settle_periods, 0)
-    seeds = point_seeds(seed_value(seed), n)
+    base_seed = seed_value(seed)
+    seeds = point_seeds(base_seed, n)
     threads = integer("workers", workers if workers is not None else (os.cpu_count() or 1), 1)
     require(executor is None or callable(getattr(executor, "submit", None)), "executor", executor,
             "a concurrent.futures.Executor (with submit)")  # fmt: skip
@@ -459,7 +508,7 @@ def sweep(
             run_on.shutdown(cancel_futures=True)
         if bar is not None:
             bar.close()
-    status = np.array(STATUS)[results.pop("status")]
+    status = np.array(STATUS_NAMES)[results.pop("status")]
     settle = results.pop("settle_periods")
     if isinstance(base_controller, PID):
         described: Any = base_controller.__dict__
@@ -482,6 +531,8 @@ def sweep(
             "controller": described,
             "f0": excitation.f0,
             "fs": excitation.fs,
+            "seed": base_seed,
+            "amb_fast_version": _version(),
         },  # fmt: skip
         **results,
     )

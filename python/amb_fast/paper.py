@@ -9,10 +9,12 @@ import numpy as np
 
 from . import claims as claim_checks
 from ._study import GAINS, PaperStudy, paper_study
+from .io import atomic_path, atomic_text
 
 FIGURES = {  # file -> what it shows (the paper's figure)
     "fig4_effective.png": "effective k, c (Fig. 4)",
     "fig5_actual.png": "actual k, c (Fig. 5)",
+    "fig5_overlay.png": "effective and actual k, c in one figure, +-2 s.e. bands (Figs. 4 and 5 together)",
     "fig6_ki.png": "Ki family (Fig. 6)",
     "fig7_ki_zoom.png": "Ki family around the natural frequency (Fig. 7)",
     "fig8_kd.png": "Kd family (Fig. 8)",
@@ -26,28 +28,44 @@ def _say(progress: bool, text: str) -> None:
         print(text, file=sys.stderr, flush=True)
 
 
-def _write_csv(path: Path, columns: dict[str, np.ndarray]) -> None:
-    np.savetxt(path, np.column_stack(list(columns.values())), delimiter=",", header=",".join(columns), comments="",
-               fmt="%.10g")  # fmt: skip
+def _family_suffix() -> str:
+    try:
+        import h5netcdf  # noqa: F401
+        import xarray  # noqa: F401
+    except ImportError:
+        return ".npz"
+    return ".nc"
+
+
+def output_names() -> list[str]:
+    """Every file ``amb-fast paper`` writes into its folder."""
+    families = [f"family_{g}{suffix}" for g in GAINS for suffix in (".csv", _family_suffix())]
+    return [*FIGURES, "claims.md", "effective.csv", "actual.csv", *families]
+
+
+def _write_csv(path: Path, columns: dict[str, np.ndarray], meta: dict | None = None) -> None:
+    """A CSV with the column names in the first line and the metadata (version, rig, controller, seed) in
+    trailing ``#`` lines."""
+    from .io._results import trailer
+
+    with atomic_path(path) as target, open(target, "w") as handle:
+        np.savetxt(handle, np.column_stack(list(columns.values())), delimiter=",", header=",".join(columns),
+                   comments="", fmt="%.10g")  # fmt: skip
+        handle.write(trailer(meta or {}))
 
 
 def write_curves(study: PaperStudy, out: Path) -> list[Path]:
     """Every curve as CSV (units in the column names), and each gain family as NetCDF (or .npz without xarray)."""
     e = study.estimate
+    meta = {"rig": study.rig, "controller": study.pid, "seed": e.meta.get("seed")}
     written = [out / "effective.csv", out / "actual.csv"]
-    _write_csv(written[0], {"freq_Hz": study.freq, "k_eff_N_per_m": study.k_eff, "c_eff_Ns_per_m": study.c_eff})
+    _write_csv(written[0], {"freq_Hz": study.freq, "k_eff_N_per_m": study.k_eff, "c_eff_Ns_per_m": study.c_eff}, meta)
     _write_csv(written[1], {
         "freq_Hz": e.freq, "k_N_per_m": e.k, "c_Ns_per_m": e.c, "k_smooth_N_per_m": e.k_smooth,
         "c_smooth_Ns_per_m": e.c_smooth, "k_std_N_per_m": e.k_std, "c_std_Ns_per_m": e.c_std,
         "receptance_abs_m_per_N": np.abs(e.receptance), "receptance_phase_rad": np.angle(e.receptance),
-    })  # fmt: skip
-    try:
-        import h5netcdf  # noqa: F401
-        import xarray  # noqa: F401
-
-        suffix = ".nc"
-    except ImportError:
-        suffix = ".npz"
+    }, meta)  # fmt: skip
+    suffix = _family_suffix()
     for name, result in study.families.items():
         columns = {"freq_Hz": result.freq}
         for j, gain in enumerate(result.points[name]):
@@ -55,30 +73,35 @@ def write_curves(study: PaperStudy, out: Path) -> list[Path]:
                         f"c_smooth_Ns_per_m@{name}={gain:g}": result.c_smooth[j],
                         f"receptance_abs_m_per_N@{name}={gain:g}": np.abs(1 / result.H[j])}  # fmt: skip
         path = out / f"family_{name}.csv"
-        _write_csv(path, columns)
+        _write_csv(path, columns, {**meta, "seed": result.meta.get("seed"), "swept": name})
         result.save(out / f"family_{name}{suffix}")
         written += [path, out / f"family_{name}{suffix}"]
     return written
 
 
 def write_figures(study: PaperStudy, out: Path) -> list[Path]:
-    from .plots import plot_actual, plot_effective, plot_family
+    from .plots import plot_actual, plot_effective, plot_family, plot_overlay
 
     fn = claim_checks.natural_frequency(study.freq, study.estimate.H)
     zoom = (max(1.0, fn - 15.0), fn + 15.0)
     figures = {
         "fig4_effective.png": plot_effective(study),
         "fig5_actual.png": plot_actual(study.estimate),
-        "fig6_ki.png": plot_family(study.families["ki"], "ki"),
+        "fig5_overlay.png": plot_overlay(study.estimate, study.k_eff, study.c_eff),
+        "fig6_ki.png": plot_family(study.families["ki"], "ki", inset=zoom),
         "fig7_ki_zoom.png": plot_family(study.families["ki"], "ki", zoom=zoom),
-        "fig8_kd.png": plot_family(study.families["kd"], "kd"),
+        "fig8_kd.png": plot_family(study.families["kd"], "kd", inset=zoom),
         "fig9_kd_zoom.png": plot_family(study.families["kd"], "kd", zoom=zoom),
         "fig10_kp.png": plot_family(study.families["kp"], "kp"),
     }
     import matplotlib.pyplot as plt
 
+    from .io._results import figure_metadata
+
+    stamp = figure_metadata({"rig": study.rig, "controller": study.pid, "seed": study.estimate.meta.get("seed")})
     for name, fig in figures.items():
-        fig.savefig(out / name, dpi=110)
+        with atomic_path(out / name) as target:
+            fig.savefig(target, dpi=110, format="png", metadata=stamp)
         plt.close(fig)
     return [out / name for name in figures]
 
@@ -89,7 +112,11 @@ def report(study: PaperStudy, table: str) -> str:
     lags = ", ".join(f"{n.replace('_', ' ')} {getattr(rig, n):g} Hz" for n in stages if getattr(rig, n))
     scales = ", ".join(f"{s:g}" for s in study.scales)
     rms = np.sqrt(np.mean(ex.samples**2))
+    from . import __version__
+
     return f"""# Claims of the paper, checked on the virtual rig
+
+amb_fast {__version__}; noise seed {study.estimate.meta.get("seed")} (families: seed + 1, + 2, + 3).
 
 Rig: m = {rig.mass} kg (+ {rig.mass_loading} kg mass loading), Kyy = {rig.kyy} N/m, Kiy = {rig.kiy} N/A; {lags};
 force transducer AC coupled with tau = {rig.force_coupling_tau} s; noise {rig.sensor_noise} m rms (probe),
@@ -115,7 +142,7 @@ def write_paper(out: Path, *, seed: int = 2026, progress: bool = True) -> list[c
     _say(progress, "[4/4] checking the paper's observations ...")
     claims = study.claims()
     table = claim_checks.markdown(claims)
-    (out / "claims.md").write_text(report(study, table))
+    atomic_text(out / "claims.md", report(study, table))
     print(table)
     print(f"wrote {out}/: {', '.join(FIGURES)}, claims.md, effective.csv, actual.csv, "
           + ", ".join(f"family_{g}.csv/.nc" for g in GAINS))  # fmt: skip
