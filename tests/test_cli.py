@@ -227,3 +227,16 @@ def test_run_and_sweep_take_a_controller_file(capsys, tmp_path) -> None:
     (tmp_path / "bad.toml").write_text('[[block]]\ntype = "notch"\n')
     assert cli.main(["run", "--controller", str(tmp_path / "bad.toml")]) == 2
     assert "block 1" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("value", ["-1e4", "-2.5E+3", "-.5", "-7"])
+def test_negative_numbers_in_any_notation_are_option_values(value) -> None:
+    args = cli.build_parser().parse_args(cli._join_negative_values(["run", "--two-axis", "--kyx", value]))
+    assert args.kyx == float(value)
+
+
+def test_a_missing_value_is_still_a_usage_error(capsys) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main(["run", "--kyx", "--two-axis"])
+    assert exit_info.value.code == 2
+    assert "--kyx" in capsys.readouterr().err

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -40,10 +41,12 @@ class Trace:
     fs: float
     meta: dict = field(default_factory=dict, repr=False, compare=False)
 
-    @property
+    @cached_property
     def time(self) -> np.ndarray:
-        """Sample instants kT, s."""
-        return np.arange(self.force.size) / self.fs
+        """Sample instants kT, s (computed once, read-only)."""
+        t = np.arange(self.force.size) / self.fs
+        t.flags.writeable = False
+        return t
 
     def save(self, path: str | Path) -> None:
         """Write force and displacement as a recording (``.csv`` or ``.mat``), see :func:`load_recording`."""

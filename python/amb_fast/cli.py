@@ -13,6 +13,7 @@ overwritten without ``--overwrite``, and every file is written atomically.
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import time
 import traceback
@@ -409,7 +410,7 @@ def build_parser() -> argparse.ArgumentParser:
         "identify",
         allow_abbrev=False,
         parents=[common],
-        help="k and c from a recording (CSV with named columns, or .mat)",
+        help="k and c from a recording (.csv/.tsv/.txt with named columns, .mat incl. v7.3, .tdms)",
     )
     ident.add_argument("file", type=Path, help="recording: .csv/.tsv/.txt (a header names the columns), .mat, .tdms")
     ident.add_argument(
@@ -462,9 +463,24 @@ def _one_line(
 EXPECTED = (UsageError, ValueError, OSError, ImportError, TouchdownError, OverflowError, MemoryError)
 
 
+#: A negative number in any notation argparse would mistake for an option ("-1e4", "-.5", "-inf").
+_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-inf$", re.IGNORECASE)
+
+
+def _join_negative_values(argv: Sequence[str]) -> list[str]:
+    """``--kyx -1e4`` -> ``--kyx=-1e4``: argparse reads only plain negatives ("-5", "-0.5") as values."""
+    out: list[str] = []
+    for token in argv:
+        if _NEGATIVE_NUMBER.match(token) and out and out[-1].startswith("--") and "=" not in out[-1]:
+            out[-1] = f"{out[-1]}={token}"
+        else:
+            out.append(token)
+    return out
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_join_negative_values(sys.argv[1:] if argv is None else argv))
     args.phase = "check"
     start = time.perf_counter()
     try:
