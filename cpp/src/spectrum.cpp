@@ -28,6 +28,22 @@ std::shared_ptr<const RealPlan> real_plan(Eigen::Index L) {
     return last;
 }
 
+#ifndef POCKETFFT_NO_VECTORS
+using RealVector = pocketfft::detail::vtype_t<double>;  // SSE2/NEON: 2 doubles; 4 or 8 under -mavx/-mavx512f
+constexpr std::size_t vector_lanes = pocketfft::detail::VLEN<double>::val;
+#endif
+
+// X_b in FFTPACK's half-complex order (r0, r1, i1, r2, i2, ..., r_{L/2} if L is even), lane by lane.
+template <typename Get>
+void pick_bins(const std::vector<Eigen::Index>& bins, std::size_t L, Get value, std::complex<double>* lines) {
+    for (std::size_t j = 0; j < bins.size(); ++j) {
+        const auto b = static_cast<std::size_t>(bins[j]);
+        lines[j] = b == 0       ? cd(value(0), 0.0)
+                   : 2 * b == L ? cd(value(L - 1), 0.0)
+                                : cd(value(2 * b - 1), value(2 * b));
+    }
+}
+
 // Cost of a direct sum per sample and bin in units of pocketfft's cost_guess, measured on x86-64
 // (bench/bench_experiment.py prints both): 2.7-3.5 for L from 1000 to 40000, prime lengths
 // (Bluestein) included. The direct sum wins up to about 4 bins of a 4000-sample period.
@@ -59,6 +75,9 @@ LineTransform::LineTransform(Eigen::Index period, std::vector<Eigen::Index> bins
     if (method_ == Method::fft) {
         plan_ = real_plan(L_);
         work_.resize(static_cast<std::size_t>(L_));
+#ifndef POCKETFFT_NO_VECTORS
+        pair_work_.resize(static_cast<std::size_t>(L_ + 1) * vector_lanes);
+#endif
     } else {
         const pocketfft::detail::sincos_2pibyn<double> roots(static_cast<std::size_t>(L_));  // exp(+2 pi i n / L)
         twiddle_.resize(static_cast<std::size_t>(L_));
@@ -72,12 +91,7 @@ void LineTransform::operator()(const double* x, std::complex<double>* lines) {
         // In place, FFTPACK's half-complex order: r0, r1, i1, r2, i2, ..., (r_{L/2} if L is even).
         std::copy(x, x + L, work_.begin());
         plan_->exec(work_.data(), 1.0, true);
-        for (std::size_t j = 0; j < bins_.size(); ++j) {
-            const auto b = static_cast<std::size_t>(bins_[j]);
-            lines[j] = b == 0       ? cd(work_[0], 0.0)
-                       : 2 * b == L ? cd(work_[L - 1], 0.0)
-                                    : cd(work_[2 * b - 1], work_[2 * b]);
-        }
+        pick_bins(bins_, L, [this](std::size_t i) { return work_[i]; }, lines);
         return;
     }
     const cd* w = twiddle_.data();
@@ -101,6 +115,31 @@ void LineTransform::operator()(const double* x, std::complex<double>* lines) {
         }
         lines[j] = {(re[0] + re[1]) + (re[2] + re[3]), (im[0] + im[1]) + (im[2] + im[3])};
     }
+}
+
+void LineTransform::operator()(const double* x, const double* y, cd* lines_x, cd* lines_y) {
+#ifndef POCKETFFT_NO_VECTORS
+    if (method_ == Method::fft) {
+        // Lane 0 carries x, lane 1 y (further lanes zeros): each lane sees exactly the operations of
+        // the one-channel transform, so the digits are the same; the two run in one instruction stream.
+        const auto L = static_cast<std::size_t>(L_);
+        void* raw = pair_work_.data();
+        std::size_t room = pair_work_.size() * sizeof(double);
+        auto* v = static_cast<RealVector*>(std::align(alignof(RealVector), L * sizeof(RealVector), raw, room));
+        for (std::size_t n = 0; n < L; ++n) {
+            RealVector sample{};
+            sample[0] = x[n];
+            sample[1] = y[n];
+            v[n] = sample;
+        }
+        plan_->exec(v, 1.0, true);
+        pick_bins(bins_, L, [v](std::size_t i) { return v[i][0]; }, lines_x);
+        pick_bins(bins_, L, [v](std::size_t i) { return v[i][1]; }, lines_y);
+        return;
+    }
+#endif
+    (*this)(x, lines_x);
+    (*this)(y, lines_y);
 }
 
 void LinePlan::validate() const {
@@ -174,23 +213,31 @@ void PeriodEstimator::require_finite_block() const {
         throw NonFiniteSamples(block_first_, in_block_ * plan_.period);
 }
 
-void PeriodEstimator::line_spectrum(Eigen::VectorXd& block, Eigen::VectorXd& previous, Eigen::VectorXcd& lines) {
+bool PeriodEstimator::new_mean(Eigen::VectorXd& block, const Eigen::VectorXd& previous) const {
     if (plan_.periods_per_block > 1) block *= 1.0 / static_cast<double>(plan_.periods_per_block);  // the mean
     const Eigen::Index L = block.size();
-    if (previous.size() != L || !std::equal(block.data(), block.data() + L, previous.data())) {
-        lines.resize(static_cast<Eigen::Index>(bins_.size()));
-        transform_(block.data(), lines.data());
-        previous.swap(block);  // keep this mean without copying it
-    }
-    block.setZero(L);
+    return previous.size() != L || !std::equal(block.data(), block.data() + L, previous.data());
 }
 
 void PeriodEstimator::close_block() {
     require_finite_block();
     ++blocks_;
-    // Each channel's block mean, transformed; the sums are zeroed for the next block.
-    line_spectrum(block_f_, previous_f_, lines_f_);
-    line_spectrum(block_y_, previous_y_, lines_y_);
+    // Each channel's block mean, transformed (both at once when both changed), kept as the channel's
+    // previous mean without a copy; the sums are zeroed for the next block.
+    const Eigen::Index L = plan_.period, bins = static_cast<Eigen::Index>(bins_.size());
+    const bool new_f = new_mean(block_f_, previous_f_), new_y = new_mean(block_y_, previous_y_);
+    lines_f_.resize(bins);
+    lines_y_.resize(bins);
+    if (new_f && new_y)
+        transform_(block_f_.data(), block_y_.data(), lines_f_.data(), lines_y_.data());
+    else if (new_f)
+        transform_(block_f_.data(), lines_f_.data());
+    else if (new_y)
+        transform_(block_y_.data(), lines_y_.data());
+    if (new_f) previous_f_.swap(block_f_);
+    if (new_y) previous_y_.swap(block_y_);
+    block_f_.setZero(L);
+    block_y_.setZero(L);
     // The averaged spectra are the sum of the blocks' (the transform is linear): no extra FFT.
     const double G = static_cast<double>(plan_.periods_per_block);
     sum_F_ += G * lines_f_;

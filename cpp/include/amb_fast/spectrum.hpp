@@ -56,6 +56,9 @@ public:
 
     // lines[j] = X_{bins[j]} of the L samples at x.
     void operator()(const double* x, std::complex<double>* lines);
+    // Both channels at once: the same numbers as two calls, the two FFTs run side by side in SIMD
+    // lanes (pocketfft's vector types) where the compiler has them.
+    void operator()(const double* x, const double* y, std::complex<double>* lines_x, std::complex<double>* lines_y);
     Method method() const { return method_; }
     Eigen::Index period() const { return L_; }
 
@@ -69,6 +72,7 @@ private:
     Method method_;
     std::shared_ptr<const pocketfft::detail::pocketfft_r<double>> plan_;  // fft: shared by a thread's users
     std::vector<double> work_;                                           // fft: the period, transformed in place
+    std::vector<double> pair_work_;  // fft of two channels: L SIMD vectors (lanes x, y), plus room to align
     std::vector<std::complex<double>> twiddle_;                          // direct: exp(-2 pi i n / L), n < L
 };
 
@@ -91,10 +95,10 @@ public:
 private:
     void close_block();
     void require_finite_block() const;
-    // The line spectrum of one channel's block mean (from its sum, `block`, which is left zeroed);
-    // reused when the mean repeats bit for bit (a noise-free periodic channel), which saves the
-    // transform without changing a digit.
-    void line_spectrum(Eigen::VectorXd& block, Eigen::VectorXd& previous, Eigen::VectorXcd& lines);
+    // Turns a channel's block sum into its mean; false when the mean repeats `previous` bit for bit (a
+    // noise-free periodic channel): its line spectrum is then reused, which saves the transform
+    // without changing a digit.
+    bool new_mean(Eigen::VectorXd& block, const Eigen::VectorXd& previous) const;
 
     LinePlan plan_;
     std::vector<Eigen::Index> bins_;           // excited, then unexcited harmonics
