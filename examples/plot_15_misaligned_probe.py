@@ -51,8 +51,12 @@ for ax in axes[1]:
 axes[0, 1].legend(title="probe angle", fontsize=8)
 
 # %%
-# **Answer.** A rotated probe shows up as a pair of cross stiffnesses of opposite sign, growing with
-# the angle (``-(Kyy - m' w^2) sin(angle)``, as the table shows) and with frequency as the inertia
-# enters, while ``kxx`` and ``kyy`` barely move (they change by ``1 - cos(angle)``, second order). Opposite-sign cross
-# terms are also the signature of a seal or fluid film (``kxy = -kyx``): before reading them as a
-# process, check the probes' alignment, or give the angle to the model (``TwoAxisRig(sensor_angle=...)``).
+# **Answer.** A rotated probe shows up as a pair of cross stiffnesses of opposite sign, proportional to
+# ``sin(angle)`` and growing with frequency as the moving mass enters: ``-(Kyy - m' w^2) sin(angle)``, as
+# the table shows. Near 200 Hz the inertia term dominates, so even a few degrees give cross terms of the
+# order of the bearing's own stiffness. ``kxx`` and ``kyy`` change by ``(1 - cos(angle))`` times the
+# same term: second order in the angle, invisible at low frequency, visible at the top of the band at
+# 10 degrees. Opposite-sign cross terms are also the signature of a seal or fluid film
+# (``kxy = -kyx``), but a process gives them at every frequency while a rotated probe makes them grow
+# like ``w^2``: before reading them as a process, check the probes' alignment, or give the angle to the
+# model (``TwoAxisRig(sensor_angle=...)``).
