@@ -4,6 +4,8 @@ On ``builder-inited`` (before any page is read):
 
 - ``_generated/paper/``: the paper's study run on the virtual rig (``amb_fast.paper``): Figures 4-10,
   the curves as CSV/NetCDF, ``setup.md`` (what was run) and ``claims.md`` (the claims table).
+- ``_generated/cli/*.md``: the output of the commands the guide pages show (``CLI_RUNS``), run by the
+  build with this Python, so that the pages show what today's code prints.
 - ``_generated/speed.md``: the benchmark tables, from the JSON files ``bench/*.py --out`` writes.
   Preferred source: ``bench/results/<name>.json`` (a full run, ``python bench/<name>.py``, saved on the
   machine that builds the docs). Without it the build runs ``bench/<name>.py --quick`` itself into
@@ -43,6 +45,11 @@ BENCHMARKS = {
     "bench_core": ("The simulation loop, time per simulated sample", "ns/sample", 1e9),
     "bench_identify": ("One experiment and identification of a long recording", "ms", 1e3),
     "bench_sweep": ("Gain sweeps: throughput, thread scaling, vectorised predict, memory", "s", 1.0),
+}
+
+# Commands whose output a page includes (``{include} _generated/cli/<name>.md``): name -> arguments.
+CLI_RUNS = {
+    "run_two_axis": ["run", "--two-axis", "--kxy=1e4", "--kyx=-1e4", "--seed", "1"],
 }
 
 
@@ -109,12 +116,23 @@ def _speed(out: Path) -> None:
     out.write_text("\n\n".join(parts) + "\n")
 
 
+def _cli(out: Path) -> None:
+    """Run each command of ``CLI_RUNS`` and write it with its output as a Markdown code block."""
+    out.mkdir(parents=True, exist_ok=True)
+    for name, args in CLI_RUNS.items():
+        done = subprocess.run([sys.executable, "-m", "amb_fast", *args], check=True, cwd=ROOT,
+                              capture_output=True, text=True)  # fmt: skip
+        shown = " ".join(["amb-fast", *args])
+        (out / f"{name}.md").write_text(f"```text\n$ {shown}\n{done.stdout.rstrip()}\n```\n")
+
+
 def generate(app: Sphinx) -> None:
     GENERATED.mkdir(exist_ok=True)
     if os.environ.get("AMB_DOCS_REUSE_PAPER") and (GENERATED / "paper" / "claims.md").is_file():
         logger.info("amb_docs: reusing _generated/paper (AMB_DOCS_REUSE_PAPER is set)")
     else:
         _paper(GENERATED / "paper")
+    _cli(GENERATED / "cli")
     _speed(GENERATED / "speed.md")
 
 

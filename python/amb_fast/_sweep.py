@@ -56,7 +56,7 @@ STATUS_NAMES = (*STATUS, OVERFLOW)
 
 @dataclass(frozen=True)
 class SweepResult:
-    """Estimates of every point of a sweep, in grid order.
+    """Estimates of every point of a sweep, in grid order; what :func:`sweep` returns.
 
     Attributes
     ----------
@@ -66,22 +66,41 @@ class SweepResult:
         The values given for each swept parameter; for ``grid="product"`` the grid's shape is their
         lengths (C order: the last name varies fastest).
     grid : {"product", "zip"}
+        How the axes were combined.
     freq : ndarray
         Excited lines, Hz.
     H, k, c, k_smooth, c_smooth, k_std, c_std : ndarray
-        Shape (points, lines), as in :class:`Estimate` (N/m, N/m, N s/m, ...). NaN where status is not ok.
+        Shape (points, lines), as in :class:`Estimate`: ``H`` (complex), ``k``, ``k_smooth``, ``k_std``
+        in N/m; ``c``, ``c_smooth``, ``c_std`` in N s/m. NaN where status is not ok.
     status : ndarray of str
         "ok"; "unstable" (a linearised pole on or outside the unit circle, found before simulating);
         "touchdown" (the platform reached its clearance, or the air gap with the non-linear law);
         "saturated" (the amplifier clipped: ``Rig.current_limit``); "overflow" (a linear-law point whose
         state stopped being finite, e.g. diverging under saturation, with no clearance to touch).
     settle_periods, seeds : ndarray
-        What each point ran with: ``run_experiment(rig, pid_i, excitation, periods=periods,
-        seed=int(seeds[i]))`` reproduces point i bit for bit.
+        What each point ran with (periods; uint64 seeds): ``run_experiment(rig, pid_i, excitation,
+        periods=periods, seed=int(seeds[i]))`` reproduces point i bit for bit.
     unexcited_freq : ndarray
         Unexcited harmonics, Hz; ``unexcited_displacement`` (points, lines) their levels, m.
     periods, blocks : int
         Periods averaged per point; independent groups behind the standard errors.
+    meta : dict
+        What produced the sweep, saved with it: the rig's fields, the controller, ``f0`` and ``fs``
+        (Hz), the base seed and the amb_fast version.
+
+    See Also
+    --------
+    sweep, load_sweep, plot_family
+
+    Examples
+    --------
+    >>> result = af.sweep(af.Rig.paper(), af.PID.paper(), af.schroeder_multisine(), kp=[2000.0, 2400.0],
+    ...                   kd=[2.0, 3.0, 4.0], seed=1, progress=False)
+    >>> result.shape, result.k.shape                        # a 2 x 3 grid of 200 lines each
+    ((2, 3), (6, 200))
+    >>> k = result.k.reshape(*result.shape, -1)             # (kp, kd, lines), N/m
+    >>> result.to_xarray().k.dims
+    ('kp', 'kd', 'freq')
     """
 
     points: dict[str, np.ndarray]
@@ -180,7 +199,35 @@ _ARRAYS = ("freq", "H", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std", "sta
 
 
 def load_sweep(path: str | Path) -> SweepResult:
-    """Read a sweep written by :meth:`SweepResult.save` (``.nc`` or ``.npz``)."""
+    """Read a sweep written by :meth:`SweepResult.save` (``.nc`` or ``.npz``).
+
+    Parameters
+    ----------
+    path : str or path-like
+        A ``.nc`` (NetCDF: needs the ``xarray`` extra) or ``.npz`` file written by :meth:`SweepResult.save`.
+
+    Returns
+    -------
+    SweepResult
+        The sweep as saved: gains in their units (A/m, A/(m s), A s/m, Hz), ``freq`` in Hz, ``k`` N/m,
+        ``c`` N s/m, statuses and seeds. A file whose checksums do not match (fletcher32 and SHA-256 in
+        NetCDF, CRC-32 in ``.npz``) is refused with a ``ValueError``, and so is another suffix.
+
+    See Also
+    --------
+    SweepResult.save, sweep
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> result = af.sweep(af.Rig.paper(), af.PID.paper(), af.schroeder_multisine(), kd=[2.0, 3.0],
+    ...                   seed=1, progress=False)
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "kd.npz"
+    >>> result.save(path)
+    >>> back = af.load_sweep(path)
+    >>> bool(np.array_equal(back.k, result.k)), back.points["kd"]
+    (True, array([2., 3.]))
+    """
     path = Path(path)
     require(path.is_file(), "path", str(path), "an existing file")
     from .io import read_netcdf
@@ -412,19 +459,73 @@ def sweep(
     stays as given. ``sweep(factory, excitation, x=[...], y=[...])`` takes any callable
     ``factory(**point) -> (rig, controller)`` instead, for anything else.
 
-    ``grid="product"`` crosses the axes, ``"zip"`` pairs them. Points whose linearised loop is
-    unstable are flagged and not simulated; the rest run in a batched C++ core (points with the same
-    rig and controller shape advance in lock step), ``workers`` threads per call (default: all
-    cores), with the GIL released. Every point equals :func:`run_experiment` of that point bit for bit.
+    Parameters
+    ----------
+    rig : Rig, or callable
+        The rig every point starts from; or ``factory(**point) -> (rig, controller)``, called for each
+        point with its values (then the next argument is the excitation).
+    controller : PID or Controller
+        The controller every point starts from (with a factory: the :class:`Multisine`).
+    excitation : Multisine
+        The periodic excitation (N), at the controller's ``fs``.
+    grid : {"product", "zip"}
+        ``"product"`` crosses the axes (one grid dimension each, the last varying fastest), ``"zip"``
+        pairs them (all of one length).
+    periods : int
+        Periods averaged per point (as in :func:`run_experiment`).
+    settle_periods : int, optional
+        Periods run before recording, with ``start="rest"`` (default: from the slowest pole, per point).
+    workers : int, optional
+        Core threads per batched call (default: all cores here; one per chunk on an ``executor``).
+    executor : concurrent.futures.Executor, optional
+        Runs the chunks: threads, processes, or a dask cluster's ``client.get_executor()``.
+    progress : bool, optional
+        A tqdm progress bar (default: when stderr is a terminal).
+    seed : int, optional
+        Fixes the measurement noise; each point gets its own seed (``SweepResult.seeds``).
+    median_window : int
+        Odd window (lines) of ``k_smooth``, ``c_smooth``.
+    chunk_size : int, optional
+        Points per chunk (default: see below).
+    start : {"steady", "rest"}
+        As in :func:`run_experiment`: from the exact periodic steady state, or from rest.
+    **axes : array_like
+        The swept values, in each parameter's unit (``kp`` A/m, ``ki`` A/(m s), ``kd`` A s/m, frequencies
+        Hz, ``kyy`` N/m, ``mass_loading`` kg, ...).
+
+    Returns
+    -------
+    SweepResult
+        Every point's estimate (``k`` N/m, ``c`` N s/m over ``freq`` Hz) and status, in grid order.
+
+    Notes
+    -----
+    Points whose linearised loop is unstable are flagged and not simulated; the rest run in a batched
+    C++ core (points with the same rig and controller shape advance in lock step), ``workers`` threads
+    per call, with the GIL released. Every point equals :func:`run_experiment` of that point bit for bit.
 
     The grid is cut into chunks of ``chunk_size`` points (default: equal chunks, a multiple of the
     number of workers, up to eight per worker and of at least 32 points where there are enough), each run
-    by the batched core: on ``workers`` threads here, or on ``executor``, any
-    :class:`concurrent.futures.Executor` (threads, processes, or a dask cluster's
-    ``client.get_executor()``; each chunk then uses ``workers`` core threads, default one). Results
-    come back in grid order. ``progress``: a tqdm bar (default: when stderr is a terminal). ``seed`` fixes the
-    measurement noise; each point gets its own seed (see ``SweepResult.seeds``). ``start`` and
-    ``settle_periods`` as in :func:`run_experiment`.
+    by the batched core: on ``workers`` threads here, or on ``executor`` (each chunk then uses
+    ``workers`` core threads, default one). Results come back in grid order.
+
+    See Also
+    --------
+    SweepResult, run_experiment, load_sweep, amb_fast.two_axis.sweep
+
+    Examples
+    --------
+    >>> rig, pid, sphs = af.Rig.paper(), af.PID.paper(), af.schroeder_multisine()
+    >>> result = af.sweep(rig, pid, sphs, kp=[2000.0, 2400.0, 2800.0], seed=1, progress=False)
+    >>> result.status
+    array(['ok', 'ok', 'ok'], dtype='<U9')
+    >>> one = af.run_experiment(rig, af.PID.paper(), sphs, seed=int(result.seeds[1]))   # kp = 2400
+    >>> bool(np.array_equal(one.k, result.k[1]))                                      # bit for bit
+    True
+    >>> notched = af.sweep(rig, pid.to_controller() * af.notch(700.0), sphs, notch_freq=[500.0, 900.0],
+    ...                    seed=1, progress=False)
+    >>> notched.points["notch_freq"]
+    array([500., 900.])
     """
     require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
     factory: Factory | None = None

@@ -32,22 +32,36 @@ _GAINS = ("kp", "ki", "kd", "derivative_cutoff")
 
 @dataclass(frozen=True)
 class SweepResult2:
-    """Two-axis estimates over a grid of points; matrices have shape (points, lines, 2, 2).
+    """Two-axis estimates over a grid of points, what :func:`sweep` returns; matrices have shape
+    (points, lines, 2, 2), in grid order (for ``grid="product"`` the last name varies fastest).
 
     Attributes
     ----------
-    params : dict of ndarray
-        Each swept name's value per point.
+    params : dict of str to ndarray
+        Each swept name's value per point, in its unit (``kxy``, ``kyx`` N/m; ``cxy``, ``cyx`` N s/m;
+        ``sensor_angle`` rad; ``kp`` A/m, ...; see :func:`point_model2`).
     freq : ndarray
         Lines, Hz.
     k, c, k_std, c_std : ndarray
-        Stiffness (N/m), damping (N s/m) and their standard errors; NaN at unstable points.
+        Stiffness (N/m), damping (N s/m) and their standard errors; ``k[p, :, i, j]`` is ROSS's
+        ``k_ij`` at point p. NaN at unstable points.
     receptance : ndarray
-        Y F^-1, m/N; NaN at unstable points.
+        ``Y F^-1``, complex, m/N; NaN at unstable points.
     stable : ndarray
-        Per point, bool.
+        Per point, bool: whether the loop was stable (unstable points are not run).
     seeds : ndarray
-        Per point, uint64.
+        Per point, uint64: ``run_experiment(*point_model2(rig, controller, point), excitation,
+        seed=int(seeds[i]))`` reproduces point i bit for bit.
+
+    Examples
+    --------
+    >>> rig, pid, sphs = af.TwoAxisRig.paper(), af.PID.paper(), af.schroeder_multisine()
+    >>> kxy = np.array([0.0, 1e4, 3e4])                                          # N/m
+    >>> result = af.two_axis.sweep(rig, pid, sphs, grid="zip", kxy=kxy, kyx=-kxy, seed=1)
+    >>> result.k.shape, result.stable                    # the circulatory 3e4 N/m destabilises the loop
+    ((3, 200, 2, 2), array([ True,  True, False]))
+    >>> bool(np.isnan(result.k[2]).all())
+    True
     """
 
     params: dict[str, np.ndarray]
@@ -147,9 +161,33 @@ def _point(model: tuple[TwoAxisRig, Any], seed: int, **options: Any) -> Estimate
 
 
 def plot_coefficients2(estimate: Estimate2, *, smoothed: bool = False, effective: tuple | None = None) -> Any:
-    """The four stiffness and four damping coefficients over frequency (a 2x4 grid of axes), with
-    1.96 standard-error bands; ``effective=(K_eff, C_eff)`` from :func:`effective_coefficients` adds
-    them as dashed lines. Needs matplotlib (extra ``plot``)."""
+    """The four stiffness and four damping coefficients over frequency, in a 2x4 grid of axes.
+
+    Parameters
+    ----------
+    estimate : Estimate2
+        A two-axis estimate (:func:`run_experiment`, :func:`identify`).
+    smoothed : bool
+        Plot the median-filtered ``k_smooth``, ``c_smooth`` instead of the raw ``k``, ``c``. The bands
+        are always +-1.96 standard errors of the raw estimate.
+    effective : (K_eff, C_eff), optional
+        Effective matrices at ``estimate.freq`` (N/m, N s/m; shape (lines, 2, 2)), as
+        :func:`effective_coefficients` returns them: drawn as dashed lines.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Top row ``kxx, kxy, kyx, kyy`` (N/m), bottom row ``cxx, cxy, cyx, cyy`` (N s/m), against
+        frequency (Hz). Needs matplotlib (the ``plot`` extra).
+
+    Examples
+    --------
+    >>> rig = af.TwoAxisRig(x=af.Rig.paper(), y=af.Rig.paper(), kxy=1e4, kyx=-1e4)
+    >>> est = af.two_axis.run_experiment(rig, af.PID.paper(), af.schroeder_multisine(), seed=1)
+    >>> fig = af.plot_coefficients2(est, effective=af.two_axis.effective_coefficients(rig, af.PID.paper(), est.freq))
+    >>> [ax.get_title() for ax in fig.axes[4:]]
+    ['cxx (N s/m)', 'cxy (N s/m)', 'cyx (N s/m)', 'cyy (N s/m)']
+    """
     import matplotlib.pyplot as plt
 
     k = estimate.k_smooth if smoothed else estimate.k

@@ -1,6 +1,6 @@
 """
-Calibrate the virtual rig, predict untried gains, design for the actual stiffness and damping
-============================================================================================
+How do I calibrate the virtual rig, predict untried gains and design for the actual k, c?
+=========================================================================================
 
 A rig whose lags we do not know is recorded under two gain sets. We fit the virtual rig to the two
 estimates (:func:`amb_fast.calibration.fit_rig`), predict what a third, untried gain set will give with
@@ -63,7 +63,7 @@ print(f"untried gains: {np.mean(np.abs(check.k - k_pred) <= 1.96 * combined):.1%
 # %%
 # Design for the actual stiffness and damping
 # -------------------------------------------
-# Target 60 kN/m and 150 N s/m on 20-150 Hz, with the sensitivity peak in ISO zone A (|S| < 3), starting
+# Target 60 kN/m and 150 N s/m on 20-150 Hz, with the sensitivity peak in ISO zone A (``|S| < 3``), starting
 # from a well-damped controller inside that zone. The naive design matches the effective coefficients
 # (paper eq. 5) instead, as if there were no lags.
 band = np.arange(20.0, 151.0)
