@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 import os
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from concurrent.futures import Executor, ThreadPoolExecutor
 from dataclasses import dataclass, fields, replace
 from functools import partial
@@ -137,19 +137,18 @@ def sweep(
     stable = np.zeros(count, dtype=bool)
     models = [point_model2(rig, controller, {n: float(v[i]) for n, v in points.items()}) for i in range(count)]
     run = partial(_point, excitation=excitation, periods=periods, median_window=median_window, start=start)
-    results: Iterator[Estimate2 | None]
-    if executor is None and workers == 1:
-        results = map(run, models, seeds.tolist())
-    else:
-        pool = executor or ThreadPoolExecutor(max_workers=workers or os.cpu_count())
-        results = pool.map(run, models, seeds.tolist())
-    for i, est in enumerate(list(results)):
+    own_pool = ThreadPoolExecutor(max_workers=workers or os.cpu_count()) if executor is None and workers != 1 else None
+    try:
+        pool = executor or own_pool
+        estimates = list(pool.map(run, models, seeds.tolist()) if pool else map(run, models, seeds.tolist()))
+    finally:  # our own threads end with the call, whatever a point raised
+        if own_pool is not None:
+            own_pool.shutdown(cancel_futures=True)
+    for i, est in enumerate(estimates):
         if est is None:
             continue
         stable[i] = True
         k[i], c[i], k_std[i], c_std[i], receptance[i] = est.k, est.c, est.k_std, est.c_std, est.receptance
-    if executor is None and workers != 1:
-        pool.shutdown()
     return SweepResult2(points, excitation.freq, k, c, k_std, c_std, receptance, stable, seeds)
 
 
