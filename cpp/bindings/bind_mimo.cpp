@@ -1,6 +1,9 @@
 #include "amb_fast/mimo.hpp"
 #include "bindings.hpp"
 
+#include <pybind11/complex.h>
+#include <pybind11/numpy.h>
+
 using namespace amb_fast;
 
 namespace {
@@ -80,4 +83,69 @@ void bind_mimo(py::module_& m) {
         "settle_periods + periods from rest or the periodic steady state; returns the recorded forces "
         "(experiments, p, periods * period; only the first period, (experiments, p, period), with all_forces=False) and "
         "measured displacements (experiments, q, periods * period).");
+    m.def(
+        "mimo_line_experiments",
+        [](const Matrix& M, const Matrix& Bf, const Matrix& Bn, const Matrix& C, const Matrix& Dn,
+           const Vector& transducer_pole, const Vector& sensor_noise, const Vector& force_noise,
+           const InputArray& period_forces, Eigen::Index settle_periods, Eigen::Index periods,
+           const std::vector<std::uint64_t>& seeds, bool steady_start, const std::vector<Eigen::Index>& bins) {
+            const MimoModel model = model_of(M, Bf, Bn, C, Dn, transducer_pole, sensor_noise, force_noise);
+            const auto p = model.forces(), q = model.probes();
+            if (period_forces.ndim() != 3 || period_forces.shape(2) != p ||
+                static_cast<std::size_t>(period_forces.shape(0)) != seeds.size())
+                throw std::invalid_argument("period_forces must have shape (len(seeds), period, " + std::to_string(p) +
+                                            ")");
+            if (seeds.empty() || seeds.size() > 2)
+                throw std::invalid_argument("seeds must hold 1 or 2 seeds (experiments in lock step)");
+            if (periods < 2) throw std::invalid_argument("periods must be >= 2, got " + std::to_string(periods));
+            const auto K = static_cast<Eigen::Index>(period_forces.shape(0));
+            const auto L = static_cast<Eigen::Index>(period_forces.shape(1));
+            const auto B = static_cast<Eigen::Index>(bins.size());
+            py::array_t<std::complex<double>> force_lines({periods, B, p, K}), displacement_lines({periods, B, q, K});
+            std::complex<double>*fl = force_lines.mutable_data(), *dl = displacement_lines.mutable_data();
+            const double* input = period_forces.data();
+            std::vector<const double*> forces;
+            for (Eigen::Index k = 0; k < K; ++k) forces.push_back(input + k * L * p);
+            interruptible([&] {
+                mimo_line_experiments(model, forces.data(), L, settle_periods, periods, seeds, steady_start, bins, fl,
+                                      dl);
+                return 0;
+            });
+            return py::make_tuple(force_lines, displacement_lines);
+        },
+        py::arg("M"), py::arg("Bf"), py::arg("Bn"), py::arg("C"), py::arg("Dn"), py::arg("transducer_pole"),
+        py::arg("sensor_noise"), py::arg("force_noise"), py::arg("period_forces"), py::arg("settle_periods"),
+        py::arg("periods"), py::arg("seeds"), py::arg("steady_start"), py::arg("bins"),
+        "mimo_experiments reduced to the unscaled DFT of every recorded period at the given bins: returns the force "
+        "and displacement line spectra, complex, (periods, bins, channels, experiments). With steady_start the "
+        "transducer noise is drawn in the frequency domain (exact in distribution). Releases the GIL.");
+    m.def(
+        "estimate_2x2",
+        [](const py::array_t<std::complex<double>, py::array::c_style | py::array::forcecast>& force_lines,
+           const py::array_t<std::complex<double>, py::array::c_style | py::array::forcecast>& displacement_lines) {
+            if (force_lines.ndim() != 4 || force_lines.shape(2) != 2 || force_lines.shape(3) != 2)
+                throw std::invalid_argument("force_lines must have shape (periods, lines, 2, 2)");
+            for (py::ssize_t d = 0; d < 4; ++d)
+                if (displacement_lines.ndim() != 4 || displacement_lines.shape(d) != force_lines.shape(d))
+                    throw std::invalid_argument("displacement_lines must have the shape of force_lines");
+            const auto P = static_cast<Eigen::Index>(force_lines.shape(0));
+            const auto B = static_cast<Eigen::Index>(force_lines.shape(1));
+            const std::complex<double>*fl = force_lines.data(), *dl = displacement_lines.data();
+            const Estimate2x2 est = interruptible([&] { return estimate_2x2(fl, dl, P, B); });
+            auto complex_array = [&](const std::vector<std::complex<double>>& x) {
+                py::array_t<std::complex<double>> a({B, Eigen::Index{2}, Eigen::Index{2}});
+                std::copy(x.begin(), x.end(), a.mutable_data());
+                return a;
+            };
+            auto real_array = [&](const std::vector<double>& x) {
+                py::array_t<double> a({B, Eigen::Index{2}, Eigen::Index{2}});
+                std::copy(x.begin(), x.end(), a.mutable_data());
+                return a;
+            };
+            return py::make_tuple(complex_array(est.H), complex_array(est.receptance), complex_array(est.force),
+                                  complex_array(est.displacement), real_array(est.var_re), real_array(est.var_im));
+        },
+        py::arg("force_lines"), py::arg("displacement_lines"),
+        "The 2x2 estimate from per-period line spectra (periods, lines, channel, experiment): returns H = F Y^-1, its "
+        "inverse, the period means F and Y (lines, 2, 2), and the variances of Re H and Im H (lines, 2, 2).");
 }

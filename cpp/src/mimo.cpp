@@ -1,6 +1,8 @@
 #include "amb_fast/mimo.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <cstring>
 #include <utility>
 #include <cstdlib>
 #include <cmath>
@@ -9,6 +11,7 @@
 
 #include "amb_fast/errors.hpp"
 #include "amb_fast/interrupt.hpp"
+#include "amb_fast/spectrum.hpp"
 #include "amb_fast/steady.hpp"
 
 namespace amb_fast {
@@ -55,42 +58,67 @@ MimoLoop::MimoLoop(const MimoModel& model, const std::vector<std::uint64_t>& see
     : model_(validated(model)), lanes_(static_cast<Eigen::Index>(seeds.size())), seeds_(seeds) {
     require(lanes_ == 1 || lanes_ == 2, "lanes", lanes_, "1 or 2");
     const Eigen::Index n = model_.states(), p = model_.forces(), q = model_.probes(), r = model_.outputs();
-    // One map from [z; f; n] to [z'; o], stored by columns: the update is a sum of contiguous columns.
-    Mt_ = Eigen::MatrixXd::Zero(n + r, n + p + q);
-    Mt_.topLeftCorner(n, n) = model_.M;
-    Mt_.block(0, n, n, p) = model_.Bf;
-    Mt_.block(0, n + p, n, q) = model_.Bn;
-    Mt_.bottomLeftCorner(r, n) = model_.C;
-    Mt_.block(n, n + p, r, q) = model_.Dn;
-    // The non-zero entries only (the lags' cascades and uncoupled blocks leave many zeros), rows in
-    // groups of four padded to the longest of them (ELLPACK): four independent sums per group, so the
-    // step is not bound by the latency of one long chain of additions. Rows longest first.
-    std::vector<Eigen::Index> order(static_cast<std::size_t>(Mt_.rows()));
-    for (Eigen::Index i = 0; i < Mt_.rows(); ++i) order[static_cast<std::size_t>(i)] = i;
-    const Eigen::MatrixXd pattern = (Mt_.array() != 0.0).cast<double>().matrix();
-    std::stable_sort(order.begin(), order.end(),
-                     [&](Eigen::Index a, Eigen::Index b) { return pattern.row(a).sum() > pattern.row(b).sum(); });
-    for (std::size_t g = 0; g < order.size(); g += group) {
-        std::vector<std::vector<std::pair<int, double>>> rows(group);
-        std::size_t longest = 0;
-        for (std::size_t r = 0; r < group; ++r) {
-            const Eigen::Index i = g + r < order.size() ? order[g + r] : -1;
-            group_rows_.push_back(i);
-            if (i < 0) continue;
-            for (Eigen::Index j = 0; j < Mt_.cols(); ++j)
-                if (Mt_(i, j) != 0.0) rows[r].emplace_back(static_cast<int>(j), Mt_(i, j));
-            longest = std::max(longest, rows[r].size());
-        }
-        group_length_.push_back(static_cast<Eigen::Index>(longest));
-        for (std::size_t e = 0; e < longest; ++e)
-            for (std::size_t r = 0; r < group; ++r) {
-                const bool real = e < rows[r].size();
-                entry_col_.push_back(real ? rows[r][e].first : 0);
-                entry_value_.push_back(real ? rows[r][e].second : 0.0);
+    // One map from [z; f; n] to [z'; o].
+    Eigen::MatrixXd Mt = Eigen::MatrixXd::Zero(n + r, n + p + q);
+    Mt.topLeftCorner(n, n) = model_.M;
+    Mt.block(0, n, n, p) = model_.Bf;
+    Mt.block(0, n + p, n, q) = model_.Bn;
+    Mt.bottomLeftCorner(r, n) = model_.C;
+    Mt.block(n, n + p, r, q) = model_.Dn;
+    const Eigen::Index rows = Mt.rows(), per_block = slots / lanes_, blocks = (rows + per_block - 1) / per_block;
+    pass_ = blocks <= 1 ? 1 : blocks <= 2 ? 2 : 4;
+    const Eigen::Index per_pass = pass_ * per_block;
+    passes_ = (rows + per_pass - 1) / per_pass;
+    rows_ = passes_ * per_pass;
+    // Rows into passes, greedily: the row with the most non-zeros first, then the rows that add the
+    // fewest new columns to the pass.
+    const Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic> nonzero = Mt.array() != 0.0;
+    std::vector<bool> taken(static_cast<std::size_t>(rows), false);
+    std::vector<Eigen::Index> order;  // row at each position (-1: padding)
+    for (Eigen::Index pass = 0; pass < passes_; ++pass) {
+        Eigen::Array<bool, 1, Eigen::Dynamic> used = Eigen::Array<bool, 1, Eigen::Dynamic>::Constant(Mt.cols(), false);
+        for (Eigen::Index at = 0; at < per_pass; ++at) {
+            Eigen::Index best = -1, best_cost = 0;
+            for (Eigen::Index i = 0; i < rows; ++i) {
+                if (taken[static_cast<std::size_t>(i)]) continue;
+                const Eigen::Index cost = at == 0 ? -nonzero.row(i).count() : (nonzero.row(i) && !used).count();
+                if (best < 0 || cost < best_cost) best = i, best_cost = cost;
             }
+            order.push_back(best);
+            if (best < 0) continue;
+            taken[static_cast<std::size_t>(best)] = true;
+            used = used || nonzero.row(best);
+        }
     }
-    w_.assign(static_cast<std::size_t>((n + p + q) * lanes_), 0.0);
-    next_.assign(static_cast<std::size_t>((n + r) * lanes_), 0.0);
+    position_.assign(static_cast<std::size_t>(rows), 0);
+    for (std::size_t at = 0; at < order.size(); ++at)
+        if (order[at] >= 0) position_[static_cast<std::size_t>(order[at])] = static_cast<Eigen::Index>(at);
+    for (Eigen::Index pass = 0; pass < passes_; ++pass) {
+        const Eigen::Index first = pass * per_pass;
+        std::vector<Eigen::Index> columns;
+        for (Eigen::Index j = 0; j < Mt.cols(); ++j) {
+            bool used = false;
+            for (Eigen::Index at = first; at < first + per_pass; ++at)
+                used = used || (order[static_cast<std::size_t>(at)] >= 0 && nonzero(order[static_cast<std::size_t>(at)], j));
+            if (used) columns.push_back(j);
+        }
+        // inputs first
+        std::stable_partition(columns.begin(), columns.end(), [&](Eigen::Index j) { return j >= n; });
+        const auto states = std::count_if(columns.begin(), columns.end(), [&](Eigen::Index j) { return j < n; });
+        pass_inputs_.push_back(static_cast<int>(static_cast<Eigen::Index>(columns.size()) - states));
+        pass_states_.push_back(static_cast<int>(states));
+        for (const Eigen::Index j : columns) {
+            offsets_.push_back(static_cast<int>((j >= n ? j - n : position_[static_cast<std::size_t>(j)]) * lanes_));
+            for (Eigen::Index b = 0; b < pass_; ++b)
+                for (Eigen::Index s = 0; s < slots; ++s) {
+                    const Eigen::Index row = order[static_cast<std::size_t>(first + b * per_block + s / lanes_)];
+                    coefficients_.push_back(row >= 0 ? Mt(row, j) : 0.0);
+                }
+        }
+    }
+    w_.assign(static_cast<std::size_t>(rows_ * lanes_), 0.0);
+    next_.assign(static_cast<std::size_t>(rows_ * lanes_), 0.0);
+    inputs_.assign(static_cast<std::size_t>(chunk * (p + q) * lanes_), 0.0);
     q_ = Eigen::MatrixXd::Zero(p, lanes_);
     for (Eigen::Index l = 0; l < lanes_; ++l) {
         for (Eigen::Index j = 0; j < q; ++j) sensor_rng_.emplace_back(stream_seed(seeds[l], 0, j));
@@ -102,12 +130,17 @@ MimoLoop::MimoLoop(const MimoModel& model, const std::vector<std::uint64_t>& see
 
 Eigen::VectorXd MimoLoop::state(Eigen::Index lane) const {
     Eigen::VectorXd z(model_.states());
-    for (Eigen::Index i = 0; i < z.size(); ++i) z[i] = w_[static_cast<std::size_t>(i * lanes_ + lane)];
+    for (Eigen::Index i = 0; i < z.size(); ++i)
+        z[i] = w_[static_cast<std::size_t>(position_[static_cast<std::size_t>(i)] * lanes_ + lane)];
     return z;
 }
 
+void MimoLoop::set_state(Eigen::Index i, Eigen::Index lane, double value) {
+    w_[static_cast<std::size_t>(position_[static_cast<std::size_t>(i)] * lanes_ + lane)] = value;
+}
+
 void MimoLoop::run(const double* const* force, Eigen::Index n, double* const* recorded, double* const* out) {
-    const Eigen::Index ns = model_.states(), p = model_.forces(), q = model_.probes();
+    const Eigen::Index p = model_.forces(), q = model_.probes();
     for (Eigen::Index start = 0; start < n; start += chunk) {
         poll_interrupt();
         const Eigen::Index m = std::min(chunk, n - start);
@@ -119,12 +152,20 @@ void MimoLoop::run(const double* const* force, Eigen::Index n, double* const* re
                 if (model_.force_noise[j] > 0.0)
                     force_rng_[l * p + j].fill(force_draws_[l].col(j).data(), m, model_.force_noise[j]);
         }
+        // The chunk's inputs [f; n] x lanes, sample-major.
+        for (Eigen::Index l = 0; l < lanes_; ++l)
+            for (Eigen::Index k = 0; k < m; ++k) {
+                double* in = inputs_.data() + k * (p + q) * lanes_ + l;
+                const double* f = force[l] + (start + k) * p;
+                for (Eigen::Index j = 0; j < p; ++j) in[j * lanes_] = f[j];
+                for (Eigen::Index j = 0; j < q; ++j) in[(p + j) * lanes_] = sensor_draws_[l](k, j);
+            }
         if (lanes_ == 2)
             run_block<2>(force, start, m, recorded, out);
         else
             run_block<1>(force, start, m, recorded, out);
         // Inf and NaN never turn finite again in a linear recursion: one check per chunk.
-        for (Eigen::Index i = 0; i < ns * lanes_; ++i) {
+        for (Eigen::Index i = 0; i < rows_ * lanes_; ++i) {
             if (std::isfinite(w_[static_cast<std::size_t>(i)])) continue;
             std::ostringstream msg;
             msg << "the state became non-finite by sample " << k_ + start + m << ": the loop is unstable";
@@ -135,83 +176,192 @@ void MimoLoop::run(const double* const* force, Eigen::Index n, double* const* re
 }
 
 namespace {
-// The lanes of one state entry: a pair of doubles in one SIMD register (GCC/Clang vector extension), or one.
-typedef double Pair __attribute__((vector_size(16), may_alias));
+// Four slots in one SIMD register (GCC/Clang vector extension): two 16-byte halves in a portable build,
+// one 32-byte register in the AVX2 kernel. Loads and stores go through memcpy (no alignment assumed).
+typedef double Quad __attribute__((vector_size(32)));
+typedef double Pair __attribute__((vector_size(16)));
+typedef double PairU __attribute__((vector_size(16), aligned(8), may_alias));
+typedef double QuadU __attribute__((vector_size(32), aligned(8), may_alias));  // for unaligned stores
+
+struct Step {
+    Eigen::Index states, forces, probes, outputs, passes, m, start;
+    const int *pass_inputs, *pass_states, *offsets;
+    const Eigen::Index* output_position;  // of each output row
+    const double* coefficients;
+    const double* in;  // the chunk's inputs, (forces + probes) x lanes per sample
+    double *w, *next;  // [z; o; padding] x lanes, swapped every sample
+    const double* const* force;
+    double* const* recorded;
+    double* const* out;
+    const double* pole;
+    double* transducer;  // [lane][channel], 8 per lane
+    const double* const* force_noise;
+    Eigen::Index noise_stride;
+};
+
+// A column's value in every slot: (v0, v1, v0, v1) for two lanes, (v, v, v, v) for one. (Through a
+// pointer: a function returning a 32-byte vector would change the ABI without AVX.)
 template <int K>
-struct LaneType {
-    using type = double;
-};
-template <>
-struct LaneType<2> {
-    using type = Pair;
-};
+__attribute__((always_inline)) inline void column(const double* x, Quad* value) {
+    if constexpr (K == 2) {
+        Pair pair;
+        std::memcpy(&pair, x, sizeof pair);
+        *value = __builtin_shufflevector(pair, pair, 0, 1, 0, 1);
+    } else {
+        const double v = *x;
+        *value = Quad{v, v, v, v};
+    }
+}
+
+// Adds `count` columns of x (at x + offsets[j], K values each) times their coefficients (P blocks of four
+// each, from c) to the sums: even columns to `even`, odd ones to `odd` (two short chains, not one long one).
+template <int K, int P>
+__attribute__((always_inline)) inline void accumulate(const double* x, int count, const int*& offsets,
+                                                      const double*& c, Quad* even, Quad* odd) {
+    const Quad zero = {0.0, 0.0, 0.0, 0.0};
+    Quad v = zero, value = zero;
+    int j = 0;
+    for (; j + 1 < count; j += 2, c += 8 * P, offsets += 2) {
+        column<K>(x + offsets[0], &value);
+        for (int b = 0; b < P; ++b) {
+            std::memcpy(&v, c + 4 * b, sizeof v);
+            even[b] += v * value;
+        }
+        column<K>(x + offsets[1], &value);
+        for (int b = 0; b < P; ++b) {
+            std::memcpy(&v, c + 4 * (P + b), sizeof v);
+            odd[b] += v * value;
+        }
+    }
+    if (j < count) {
+        column<K>(x + offsets[0], &value);
+        for (int b = 0; b < P; ++b) {
+            std::memcpy(&v, c + 4 * b, sizeof v);
+            even[b] += v * value;
+        }
+        c += 4 * P;
+        ++offsets;
+    }
+}
+
+// The whole chunk: every sample, the map by passes of P blocks kept in registers (inputs first, then
+// states, each column's coefficients times its value added to every block), the outputs, and the
+// transducers. The same source is compiled twice (portable, AVX2), so both kernels do the same IEEE
+// operations in the same order.
+template <int K, int P>
+__attribute__((always_inline)) inline void advance(Step& st) {
+    const Eigen::Index p = st.forces, r = st.outputs, ni = st.forces + st.probes;
+    double* w = st.w;
+    double* next = st.next;
+    const Quad zero = {0.0, 0.0, 0.0, 0.0};
+    for (Eigen::Index k = 0; k < st.m; ++k) {
+        const double* in = st.in + k * ni * K;
+        const double* c = st.coefficients;
+        const int* offsets = st.offsets;
+        for (Eigen::Index pass = 0; pass < st.passes; ++pass) {
+            Quad even[P], odd[P];
+            for (int b = 0; b < P; ++b) even[b] = odd[b] = zero;
+            accumulate<K, P>(in, st.pass_inputs[pass], offsets, c, even, odd);
+            accumulate<K, P>(w, st.pass_states[pass], offsets, c, even, odd);
+            // Stored in 16-byte halves, as the next sample loads them (a load from part of a wider
+            // store is not forwarded from it on every processor).
+            for (int b = 0; b < P; ++b) {
+                const Quad sum = even[b] + odd[b];
+                double* to = next + (pass * P + b) * 4;
+                *reinterpret_cast<PairU*>(to) = __builtin_shufflevector(sum, sum, 0, 1);
+                *reinterpret_cast<PairU*>(to + 2) = __builtin_shufflevector(sum, sum, 2, 3);
+            }
+        }
+        std::swap(w, next);
+        const Eigen::Index sample = st.start + k;
+        for (int l = 0; l < K; ++l) {
+            double* o = st.out[l] + sample * r;
+            for (Eigen::Index i = 0; i < r; ++i) o[i] = w[st.output_position[i] * K + l];
+            const double* f = st.force[l] + sample * p;
+            double* rec = st.recorded[l] + sample * p;
+            double* qs = st.transducer + 8 * l;
+            for (Eigen::Index j = 0; j < p; ++j) {
+                const double a = st.pole[j];
+                double value = f[j];
+                if (a > 0.0) {
+                    value -= qs[j];
+                    qs[j] = a * qs[j] + (1.0 - a) * f[j];
+                }
+                rec[j] = value + st.force_noise[l][k + j * st.noise_stride];
+            }
+        }
+    }
+    st.w = w;
+    st.next = next;
+}
+
+template <int K, int P>
+void advance_portable(Step& st) {
+    advance<K, P>(st);
+}
+
+#if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
+#define AMB_FAST_MIMO_AVX2 1
+template <int K, int P>
+__attribute__((target("avx2"))) void advance_avx2(Step& st) {
+    advance<K, P>(st);
+}
+bool has_avx2() {
+    static const bool yes = __builtin_cpu_supports("avx2");
+    return yes;
+}
+#else
+bool has_avx2() { return false; }
+#endif
+
+std::atomic<int> forced_kernel{static_cast<int>(MimoKernel::automatic)};
+
+bool use_avx2() {
+    const auto kernel = static_cast<MimoKernel>(forced_kernel.load(std::memory_order_relaxed));
+    return kernel != MimoKernel::portable && has_avx2();
+}
+
+template <int K, int P>
+void advance_any(Step& st) {
+#ifdef AMB_FAST_MIMO_AVX2
+    if (use_avx2()) return advance_avx2<K, P>(st);
+#endif
+    advance_portable<K, P>(st);
+}
+
+template <int K>
+void advance_lanes(Step& st, int pass) {
+    switch (pass) {
+        case 1: return advance_any<K, 1>(st);
+        case 2: return advance_any<K, 2>(st);
+        default: return advance_any<K, 4>(st);
+    }
+}
 }  // namespace
+
+void set_mimo_kernel(MimoKernel kernel) { forced_kernel.store(static_cast<int>(kernel), std::memory_order_relaxed); }
+
+const char* mimo_kernel_name() { return has_avx2() ? "avx2" : "portable"; }
 
 template <int K>
 void MimoLoop::run_block(const double* const* force, Eigen::Index start, Eigen::Index m, double* const* recorded,
                          double* const* out) {
-    using V = typename LaneType<K>::type;
-    const Eigen::Index ns = model_.states(), p = model_.forces(), q = model_.probes(), r = model_.outputs();
-    V* __restrict w = reinterpret_cast<V*>(w_.data());
-    V* __restrict next = reinterpret_cast<V*>(next_.data());
-    const Eigen::Index groups = static_cast<Eigen::Index>(group_length_.size());
-    const Eigen::Index* lengths = group_length_.data();
-    const Eigen::Index* targets = group_rows_.data();
-    // Everything the step touches besides the map, as local pointers and copies (the outputs may alias
-    // any double, so members would be reloaded after every store).
-    const double* sensor[K];
-    const double* force_noise[K];
-    double pole[8], qs[K][8];
+    const Eigen::Index p = model_.forces();
     require(p <= 8, "force channels", p, "at most 8");
-    for (Eigen::Index j = 0; j < p; ++j) pole[j] = model_.transducer_pole[j];
+    double transducer[2 * 8] = {};
+    const double* noise[2];
     for (int l = 0; l < K; ++l) {
-        sensor[l] = sensor_draws_[l].data();
-        force_noise[l] = force_draws_[l].data();
-        for (Eigen::Index j = 0; j < p; ++j) qs[l][j] = q_(j, l);
+        noise[l] = force_draws_[l].data();
+        for (Eigen::Index j = 0; j < p; ++j) transducer[8 * l + j] = q_(j, l);
     }
-    for (Eigen::Index k = 0; k < m; ++k) {
-        for (int l = 0; l < K; ++l) {
-            double* lane = reinterpret_cast<double*>(w) + l;
-            const double* f = force[l] + (start + k) * p;
-            for (Eigen::Index j = 0; j < p; ++j) lane[(ns + j) * K] = f[j];
-            for (Eigen::Index j = 0; j < q; ++j) lane[(ns + p + j) * K] = sensor[l][k + j * chunk];
-        }
-        const int* cols = entry_col_.data();
-        const double* values = entry_value_.data();
-        for (Eigen::Index g = 0; g < groups; ++g) {
-            V a0 = w[0] * 0.0, a1 = a0, a2 = a0, a3 = a0;
-            for (Eigen::Index e = 0; e < lengths[g]; ++e, cols += group, values += group) {
-                a0 += values[0] * w[cols[0]];
-                a1 += values[1] * w[cols[1]];
-                a2 += values[2] * w[cols[2]];
-                a3 += values[3] * w[cols[3]];
-            }
-            const Eigen::Index* t = targets + g * group;
-            next[t[0]] = a0;
-            if (t[1] >= 0) next[t[1]] = a1;
-            if (t[2] >= 0) next[t[2]] = a2;
-            if (t[3] >= 0) next[t[3]] = a3;
-        }
-        for (Eigen::Index i = 0; i < ns; ++i) w[i] = next[i];
-        for (int l = 0; l < K; ++l) {
-            const double* lane = reinterpret_cast<const double*>(next) + l;
-            double* o = out[l] + (start + k) * r;
-            for (Eigen::Index i = 0; i < r; ++i) o[i] = lane[(ns + i) * K];
-            const double* f = force[l] + (start + k) * p;
-            double* rec = recorded[l] + (start + k) * p;
-            for (Eigen::Index j = 0; j < p; ++j) {
-                const double a = pole[j];
-                double value = f[j];
-                if (a > 0.0) {
-                    value -= qs[l][j];
-                    qs[l][j] = a * qs[l][j] + (1.0 - a) * f[j];
-                }
-                rec[j] = value + force_noise[l][k + j * chunk];
-            }
-        }
-    }
+    Step st{model_.states(), p, model_.probes(), model_.outputs(), passes_, m, start, pass_inputs_.data(),
+            pass_states_.data(), offsets_.data(), position_.data() + model_.states(), coefficients_.data(),
+            inputs_.data(), w_.data(), next_.data(), force, recorded, out, model_.transducer_pole.data(), transducer,
+            noise, chunk};
+    advance_lanes<K>(st, pass_);
+    if (st.w != w_.data()) w_.swap(next_);  // an odd number of samples: the state is in the other buffer
     for (int l = 0; l < K; ++l)
-        for (Eigen::Index j = 0; j < p; ++j) q_(j, l) = qs[l][j];
+        for (Eigen::Index j = 0; j < p; ++j) q_(j, l) = transducer[8 * l + j];
 }
 
 void MimoLoop::start_periodic(const double* const* period_force, Eigen::Index L) {
@@ -247,7 +397,7 @@ void MimoLoop::start_periodic(const double* const* period_force, Eigen::Index L)
             draws.fill(v.data(), ns, 1.0);
             z += root * v;
         }
-        for (Eigen::Index i = 0; i < ns; ++i) w_[static_cast<std::size_t>(i * lanes_ + l)] = z[i];
+        for (Eigen::Index i = 0; i < ns; ++i) set_state(i, l, z[i]);
         for (Eigen::Index j = 0; j < p; ++j) {
             const double a = model_.transducer_pole[j];
             q_(j, l) = a > 0.0 ? periodic_transducer_start(a, L, probe.q_(j, l)) : 0.0;
@@ -293,6 +443,138 @@ void mimo_experiments(const MimoModel& model, const double* const* period_force,
                 Eigen::Map<Eigen::RowVectorXd>(measured[l] + j * length + first, L) = out[l].row(j);
         }
     }
+}
+
+void mimo_line_experiments(const MimoModel& model, const double* const* period_force, Eigen::Index L,
+                           Eigen::Index settle_periods, Eigen::Index periods, const std::vector<std::uint64_t>& seeds,
+                           bool steady_start, const std::vector<Eigen::Index>& bins, std::complex<double>* force_lines,
+                           std::complex<double>* displacement_lines) {
+    require(L > 0, "period", L, "> 0 samples");
+    require(settle_periods >= 0, "settle_periods", settle_periods, ">= 0");
+    require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
+    const auto K = static_cast<Eigen::Index>(seeds.size());
+    for (Eigen::Index l = 0; l < K; ++l) require_finite_samples("excitation", period_force[l], L * model.forces());
+    const Eigen::Index p = model.forces(), q = model.probes(), r = model.outputs();
+    const auto B = static_cast<Eigen::Index>(bins.size());
+    MimoModel run_model = model;
+    if (steady_start) run_model.force_noise.setZero();  // drawn in the frequency domain below
+    MimoLoop loop(run_model, seeds);
+    if (steady_start) loop.start_periodic(period_force, L);
+    LineTransform transform(L, bins, LineTransform::Method::fft);
+    std::vector<Eigen::MatrixXd> rec(static_cast<std::size_t>(K), Eigen::MatrixXd(p, L)),
+        out(static_cast<std::size_t>(K), Eigen::MatrixXd(r, L));  // column k = sample k
+    std::vector<double*> rec_ptr, out_ptr;
+    for (Eigen::Index l = 0; l < K; ++l) {
+        rec_ptr.push_back(rec[static_cast<std::size_t>(l)].data());
+        out_ptr.push_back(out[static_cast<std::size_t>(l)].data());
+    }
+    Eigen::VectorXd row(L);
+    std::vector<std::complex<double>> spectrum(static_cast<std::size_t>(B));
+    // lines[((period * B + j) * channels + channel) * K + l] = spectrum[j]
+    auto put = [&](std::complex<double>* lines, Eigen::Index period, Eigen::Index channels, Eigen::Index channel,
+                   Eigen::Index l) {
+        for (Eigen::Index j = 0; j < B; ++j)
+            lines[((period * B + j) * channels + channel) * K + l] = spectrum[static_cast<std::size_t>(j)];
+    };
+    for (Eigen::Index k = 0; k < settle_periods + periods; ++k) {
+        loop.run(period_force, L, rec_ptr.data(), out_ptr.data());
+        if (k < settle_periods) continue;
+        const Eigen::Index period = k - settle_periods;
+        for (Eigen::Index l = 0; l < K; ++l) {
+            for (Eigen::Index c = 0; c < q; ++c) {
+                row = out[static_cast<std::size_t>(l)].row(c).transpose();
+                transform(row.data(), spectrum.data());
+                put(displacement_lines, period, q, c, l);
+            }
+            if (steady_start && period > 0) continue;
+            for (Eigen::Index c = 0; c < p; ++c) {
+                row = rec[static_cast<std::size_t>(l)].row(c).transpose();
+                transform(row.data(), spectrum.data());
+                put(force_lines, period, p, c, l);
+            }
+        }
+    }
+    if (!steady_start) return;
+    // Every period's force lines: the first period's plus the transducer noise, N(0, L sigma^2 / 2) in
+    // the real and in the imaginary part, drawn per experiment and channel (line by line, period by period).
+    for (Eigen::Index l = 0; l < K; ++l)
+        for (Eigen::Index c = 0; c < p; ++c) {
+            const double sigma = std::sqrt(0.5 * static_cast<double>(L)) * model.force_noise[c];
+            NormalStream draws(stream_seed(seeds[static_cast<std::size_t>(l)], 2, c));
+            for (Eigen::Index j = 0; j < B; ++j) spectrum[static_cast<std::size_t>(j)] = force_lines[(j * p + c) * K + l];
+            for (Eigen::Index period = 0; period < periods; ++period)
+                for (Eigen::Index j = 0; j < B; ++j) {
+                    std::complex<double> value = spectrum[static_cast<std::size_t>(j)];
+                    if (sigma > 0.0) {
+                        const double re = draws(), im = draws();
+                        value += std::complex<double>(sigma * re, sigma * im);
+                    }
+                    force_lines[((period * B + j) * p + c) * K + l] = value;
+                }
+        }
+}
+
+Estimate2x2 estimate_2x2(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines,
+                         Eigen::Index periods, Eigen::Index lines) {
+    using cd = std::complex<double>;
+    using M2 = Eigen::Matrix2cd;
+    require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
+    Estimate2x2 est;
+    est.lines = lines;
+    est.periods = periods;
+    const auto n = static_cast<std::size_t>(4 * lines);
+    est.H.resize(n);
+    est.receptance.resize(n);
+    est.force.resize(n);
+    est.displacement.resize(n);
+    est.var_re.resize(n);
+    est.var_im.resize(n);
+    // [period][line][channel][experiment]: one 2x2 matrix (row: channel, column: experiment), row-major.
+    auto matrix = [&](const cd* lines_of, Eigen::Index period, Eigen::Index j) {
+        const cd* x = lines_of + (period * lines + j) * 4;
+        M2 A;
+        A << x[0], x[1], x[2], x[3];
+        return A;
+    };
+    auto store = [](std::vector<cd>& to, Eigen::Index j, const M2& A) {
+        for (int i = 0; i < 2; ++i)
+            for (int c = 0; c < 2; ++c) to[static_cast<std::size_t>(4 * j + 2 * i + c)] = A(i, c);
+    };
+    auto inverse = [](const M2& A) {
+        const cd det = A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0);
+        M2 inv;
+        inv << A(1, 1) / det, -A(0, 1) / det, -A(1, 0) / det, A(0, 0) / det;
+        return inv;
+    };
+    const double scale = 1.0 / static_cast<double>(periods * (periods - 1));
+    for (Eigen::Index j = 0; j < lines; ++j) {
+        M2 F = M2::Zero(), Y = M2::Zero();
+        for (Eigen::Index period = 0; period < periods; ++period) {
+            F += matrix(force_lines, period, j);
+            Y += matrix(displacement_lines, period, j);
+        }
+        F /= static_cast<double>(periods);
+        Y /= static_cast<double>(periods);
+        if (!F.allFinite() || !Y.allFinite()) throw std::invalid_argument("force and displacement must be finite");
+        const M2 Yinv = inverse(Y);
+        const M2 H = F * Yinv;
+        Eigen::Matrix2d re = Eigen::Matrix2d::Zero(), im = Eigen::Matrix2d::Zero();
+        for (Eigen::Index period = 0; period < periods; ++period) {
+            const M2 dH = ((matrix(force_lines, period, j) - F) - H * (matrix(displacement_lines, period, j) - Y)) * Yinv;
+            re += dH.real().cwiseAbs2();
+            im += dH.imag().cwiseAbs2();
+        }
+        store(est.H, j, H);
+        store(est.receptance, j, inverse(H));
+        store(est.force, j, F);
+        store(est.displacement, j, Y);
+        for (int i = 0; i < 2; ++i)
+            for (int c = 0; c < 2; ++c) {
+                est.var_re[static_cast<std::size_t>(4 * j + 2 * i + c)] = re(i, c) * scale;
+                est.var_im[static_cast<std::size_t>(4 * j + 2 * i + c)] = im(i, c) * scale;
+            }
+    }
+    return est;
 }
 
 }  // namespace amb_fast

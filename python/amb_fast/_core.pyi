@@ -160,3 +160,22 @@ def mimo_experiments(
     steady_start: bool = True,
     all_forces: bool = True,
 ) -> tuple[np.ndarray, np.ndarray]: ...
+def mimo_line_experiments(
+    M: ArrayLike,
+    Bf: ArrayLike,
+    Bn: ArrayLike,
+    C: ArrayLike,
+    Dn: ArrayLike,
+    transducer_pole: ArrayLike,
+    sensor_noise: ArrayLike,
+    force_noise: ArrayLike,
+    period_forces: ArrayLike,
+    settle_periods: int,
+    periods: int,
+    seeds: list[int],
+    steady_start: bool,
+    bins: ArrayLike,
+) -> tuple[np.ndarray, np.ndarray]: ...
+def estimate_2x2(
+    force_lines: ArrayLike, displacement_lines: ArrayLike
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...

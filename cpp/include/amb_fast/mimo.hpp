@@ -10,6 +10,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <complex>
 #include <cstdint>
 #include <vector>
 
@@ -56,22 +57,39 @@ private:
     template <int K>
     void run_block(const double* const* force, Eigen::Index start, Eigen::Index m, double* const* recorded,
                    double* const* out);
+    void set_state(Eigen::Index i, Eigen::Index lane, double value);
 
     MimoModel model_;
     Eigen::Index lanes_;
-    Eigen::MatrixXd Mt_;  // [[M, Bf, Bn], [C, 0, Dn]] by columns: the update is a sum of columns
-    static constexpr std::size_t group = 4;
-    std::vector<Eigen::Index> group_rows_, group_length_;  // the rows of each group of four (-1: none), its length
-    std::vector<int> entry_col_;                           // entry e of the group's rows, four at a time
-    std::vector<double> entry_value_;
-    // [z; f; n] and [z'; o], lanes interleaved (entry j of lane l at j*K + l), 16-byte aligned for pairs.
-    std::vector<double, Eigen::aligned_allocator<double>> w_, next_;
+    // The map from [z; f; n] to [z'; o], by columns, in row blocks of one SIMD register of four slots:
+    // four rows of one lane, or two rows of both (slot s: row s / lanes of the block, lane s % lanes).
+    // A pass keeps `pass_` blocks of sums in registers and adds each of its columns' coefficients
+    // times the column's value (every lane's) to all of them; the rows are grouped into passes that
+    // share few columns (an axis' rows), and a pass visits only the columns its rows use: the input
+    // columns (f, n: not waiting for the previous sample) first, then the state columns. Rows padded
+    // with zeros to whole passes.
+    static constexpr int slots = 4;
+    int pass_ = 1;                        // blocks per pass: 1, 2 or 4
+    Eigen::Index passes_ = 0, rows_ = 0;  // passes, padded rows
+    std::vector<Eigen::Index> position_;  // row i of [z'; o] at position_[i] of the state buffers
+    std::vector<int> pass_inputs_, pass_states_;  // columns per pass
+    std::vector<int> offsets_;                    // per pass and column: where its value is (in doubles)
+    std::vector<double, Eigen::aligned_allocator<double>> coefficients_;  // [pass][column][block][slot]
+    std::vector<double, Eigen::aligned_allocator<double>> w_, next_;  // rows by position x lanes
+    std::vector<double, Eigen::aligned_allocator<double>> inputs_;    // a chunk's [f; n] x lanes, sample-major
     Eigen::MatrixXd q_;             // transducer states, p x lanes
     std::vector<std::uint64_t> seeds_;
     std::vector<NormalStream> sensor_rng_, force_rng_;  // lane-major: source j of lane l at l*count + j
     std::vector<Eigen::MatrixXd> sensor_draws_, force_draws_;  // per lane: chunk x q, chunk x p
     Eigen::Index k_ = 0;
 };
+
+// Which kernel advances the MIMO loop: chosen at run time (AVX2 where the processor has it, on x86-64),
+// or forced, for tests. Both give bit-identical results (same operations in the same order; no
+// fused multiply-add).
+enum class MimoKernel { automatic, portable, avx2 };
+void set_mimo_kernel(MimoKernel kernel);  // avx2 falls back to portable where the processor lacks it
+const char* mimo_kernel_name();           // the kernel automatic picks here: "avx2" or "portable"
 
 // Runs the loop from rest: recorded forces (n x p) and outputs (n x r), sample-major.
 void mimo_simulate(const MimoModel& model, const double* force, Eigen::Index n, std::uint64_t seed, double* recorded,
@@ -84,5 +102,33 @@ void mimo_simulate(const MimoModel& model, const double* force, Eigen::Index n, 
 void mimo_experiments(const MimoModel& model, const double* const* period_force, Eigen::Index L,
                       Eigen::Index settle_periods, Eigen::Index periods, const std::vector<std::uint64_t>& seeds,
                       bool steady_start, double* const* recorded, double* const* measured, bool all_forces = true);
+
+}  // namespace amb_fast
+
+namespace amb_fast {
+
+// Experiments in lock step (as mimo_experiments, K = seeds.size()), reduced to the line spectra of every
+// recorded period: lines[((period * bins + j) * channels + channel) * K + experiment] = the unscaled
+// DFT of that period of that channel at bins[j] (force: p channels, displacement: q). With
+// steady_start the recorded force is the same every period (to rounding) plus the transducers' white
+// noise, which enters nothing else: its per-period line spectra are drawn directly as independent
+// complex normals of variance L sigma^2 (exact in distribution), from one stream per experiment and
+// channel; from rest the force noise is added sample by sample and every period transformed.
+void mimo_line_experiments(const MimoModel& model, const double* const* period_force, Eigen::Index L,
+                           Eigen::Index settle_periods, Eigen::Index periods, const std::vector<std::uint64_t>& seeds,
+                           bool steady_start, const std::vector<Eigen::Index>& bins, std::complex<double>* force_lines,
+                           std::complex<double>* displacement_lines);
+
+// The 2x2 estimate H = F Y^-1 per line from both experiments' per-period line spectra, laid out as
+// mimo_line_experiments writes them (2 channels, 2 experiments): F, Y the period means, and the
+// variance of H's real and imaginary parts from the linearised dH = (dF - H dY) Y^-1 of every period
+// (sum of squares / (P (P - 1))). Matrices per line, row-major 2x2: [line][i][j].
+struct Estimate2x2 {
+    Eigen::Index lines = 0, periods = 0;
+    std::vector<std::complex<double>> H, receptance, force, displacement;  // force, displacement: [line][channel][experiment]
+    std::vector<double> var_re, var_im;
+};
+Estimate2x2 estimate_2x2(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines,
+                         Eigen::Index periods, Eigen::Index lines);
 
 }  // namespace amb_fast

@@ -139,20 +139,13 @@ def estimate2(
     """The 2x2 estimate from both experiments' recorded periods.
 
     ``force``, ``displacement``: (2 experiments, 2 channels, periods * period), or already their
-    per-period line spectra (periods, lines, channel, experiment), complex.
+    per-period line spectra (periods, lines, channel, experiment), complex. ``H = F Y^-1`` per line with
+    F, Y the period means; its standard errors from the linearised ``dH = (dF - H dY) Y^-1`` of every
+    period (the compiled core's ``estimate_2x2``).
     """
     Fp = force if np.iscomplexobj(force) else period_spectra(force, harmonics, period)
     Yp = displacement if np.iscomplexobj(displacement) else period_spectra(displacement, harmonics, period)
-    P = Fp.shape[0]
-    F, Y = Fp.mean(axis=0), Yp.mean(axis=0)
-    if not (np.all(np.isfinite(F)) and np.all(np.isfinite(Y))):
-        raise ValueError("force and displacement must be finite")
-    Yinv = _inverse(Y)
-    H = _product(F, Yinv)
-    # Linearised: dH = (dF - H dY) Y^-1 per period; the variance of the mean over the periods.
-    dH = _product((Fp - F) - _product(H, Yp - Y), Yinv)
-    var_re = np.sum(dH.real**2, axis=0) / (P * (P - 1))
-    var_im = np.sum(dH.imag**2, axis=0) / (P * (P - 1))
+    H, receptance, F, Y, var_re, var_im = _core.estimate_2x2(Fp, Yp)
     w = (2 * np.pi * harmonics * f0)[:, None, None]
     k = mass * w**2 * np.eye(2) + H.real
     c = H.imag / w
@@ -160,7 +153,7 @@ def estimate2(
     return Estimate2(
         freq=harmonics * f0,
         H=H,
-        receptance=_inverse(H),
+        receptance=receptance,
         k=k,
         c=c,
         k_smooth=_median(k, median_window),
@@ -169,7 +162,7 @@ def estimate2(
         c_std=np.sqrt(var_im) / w,
         force=scale * F,
         displacement=scale * Y,
-        periods=P,
+        periods=Fp.shape[0],
         mass=mass,
     )
 
@@ -178,21 +171,8 @@ def _median(x: np.ndarray, window: int) -> np.ndarray:
     """Running median across the lines (axis 0) per entry; the ends repeat the edge value."""
     half = window // 2
     padded = np.concatenate([np.repeat(x[:1], half, axis=0), x, np.repeat(x[-1:], half, axis=0)])
-    return np.median(np.lib.stride_tricks.sliding_window_view(padded, window, axis=0), axis=-1)
-
-
-def _inverse(A: np.ndarray) -> np.ndarray:
-    """Inverses of a stack of 2x2 matrices (..., 2, 2), written out."""
-    a, b, c, d = A[..., 0, 0], A[..., 0, 1], A[..., 1, 0], A[..., 1, 1]
-    det = a * d - b * c
-    return np.stack([np.stack([d, -b], -1), np.stack([-c, a], -1)], -2) / det[..., None, None]
-
-
-def _product(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """Products of stacks of 2x2 matrices, written out (numpy's matmul is slow on tiny matrices)."""
-    a = A[..., :, 0, None] * B[..., None, 0, :]
-    a += A[..., :, 1, None] * B[..., None, 1, :]
-    return a
+    view = np.lib.stride_tricks.sliding_window_view(padded, window, axis=0)
+    return np.partition(view, half, axis=-1)[..., half]
 
 
 def excitation_pair(excitation: Multisine) -> np.ndarray:
@@ -241,22 +221,12 @@ def run_experiment(
     seeds = [s, (s ^ 0xA5A5A5A5DEADBEEF) % 2**64]
     args = _core_args(model, rig, outputs=2)
     harmonics = excitation.harmonics
-    steady = start == "steady"
-    if steady:  # the transducer noise is drawn in the frequency domain (below), not in the loop
-        args["force_noise"] = np.zeros(2)
-    force, displacement = _core.mimo_experiments(**args, period_forces=excitation_pair(excitation),
-                                                 settle_periods=settle_periods, periods=periods, seeds=seeds,
-                                                 steady_start=steady, all_forces=not steady)  # fmt: skip
-    Fp: np.ndarray = force
-    if steady:
-        # In the periodic steady state the recorded force is the same every period (to rounding) plus the
-        # transducer's white noise, which enters nothing else: its line spectra per period are independent
-        # complex normals with variance period * sigma^2 (exact in distribution; half the FFTs).
-        lines = np.fft.rfft(force[:, :, :period], axis=2)[..., harmonics].transpose(2, 1, 0)  # (lines, ch, exp)
-        sigma = np.sqrt(period / 2) * np.array([a.force_noise for a in rig.axes])[None, None, :, None]
-        draws = np.random.default_rng([s, 0x5EED]).standard_normal((2, periods, harmonics.size, 2, 2))
-        Fp = lines[None] + sigma * (draws[0] + 1j * draws[1])
-    return estimate2(Fp, displacement, harmonics, period, excitation.f0, rig.mass, window)
+    # Per-period line spectra in the core; in the periodic steady state the transducer noise (which enters
+    # nothing else) is drawn there in the frequency domain, exact in distribution.
+    Fp, Yp = _core.mimo_line_experiments(**args, period_forces=excitation_pair(excitation),
+                                         settle_periods=settle_periods, periods=periods, seeds=seeds,
+                                         steady_start=start == "steady", bins=harmonics)  # fmt: skip
+    return estimate2(Fp, Yp, harmonics, period, excitation.f0, rig.mass, window)
 
 
 def _settle(rig: TwoAxisRig, fs: float, poles: np.ndarray, period: int) -> int:

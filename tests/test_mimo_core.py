@@ -1,0 +1,106 @@
+"""The compiled two-axis paths (issue 14, speed): the MIMO kernels, the per-period line spectra and the
+2x2 estimate of the core, each against numpy computing the same thing."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import amb_fast as af
+from amb_fast import _core
+from amb_fast import two_axis as ta
+from amb_fast.two_axis._experiment import _core_args, excitation_pair, loop_model
+
+PID = af.PID.paper()
+
+
+def numpy_estimate(Fp: np.ndarray, Yp: np.ndarray) -> tuple[np.ndarray, ...]:
+    """H = F Y^-1 per line and the variances of Re H, Im H from dH = (dF - H dY) Y^-1, in numpy."""
+    P = Fp.shape[0]
+    F, Y = Fp.mean(axis=0), Yp.mean(axis=0)
+    Yinv = np.linalg.inv(Y)
+    H = F @ Yinv
+    dH = ((Fp - F) - H @ (Yp - Y)) @ Yinv
+    var_re = np.sum(dH.real**2, axis=0) / (P * (P - 1))
+    var_im = np.sum(dH.imag**2, axis=0) / (P * (P - 1))
+    return H, np.linalg.inv(H), F, Y, var_re, var_im
+
+
+def test_estimate_2x2_equals_numpy(rng) -> None:
+    periods, lines = 7, 31
+    shape = (periods, lines, 2, 2)
+    Fp = rng.normal(size=shape) + 1j * rng.normal(size=shape) + 3 * np.eye(2)
+    Yp = 1e-5 * (rng.normal(size=shape) + 1j * rng.normal(size=shape) + 4 * np.eye(2))
+    for got, want in zip(_core.estimate_2x2(Fp, Yp), numpy_estimate(Fp, Yp)):
+        assert got.shape == (lines, 2, 2)
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-15 * np.max(np.abs(want)))
+    with pytest.raises(ValueError, match="finite"):
+        _core.estimate_2x2(np.where(np.arange(lines)[None, :, None, None] == 3, np.nan, Fp), Yp)
+    with pytest.raises(ValueError):
+        _core.estimate_2x2(Fp[:, :, :1], Yp[:, :, :1])
+
+
+@pytest.mark.parametrize("start", ["steady", "rest"])
+def test_line_experiments_are_the_spectra_of_the_experiments(start: str) -> None:
+    """Noise-free: the line spectra equal numpy's rfft of every recorded period of mimo_experiments."""
+    quiet = replace(af.Rig.paper(), sensor_noise=0.0, force_noise=0.0, force_coupling_tau=0.02)
+    rig = ta.TwoAxisRig(x=quiet, y=replace(quiet, dead_time=0.1e-3), kxy=3e3, kyx=-3e3, sensor_angle=0.02)
+    sphs = af.schroeder_multisine(f0=20.0, f_max=400.0)
+    model = loop_model(rig, PID)
+    args = _core_args(model, rig, outputs=2)
+    steady, settle, periods, L = start == "steady", (0 if start == "steady" else 30), 3, sphs.period_samples
+    common = dict(period_forces=excitation_pair(sphs), settle_periods=settle, periods=periods, seeds=[5, 6],
+                  steady_start=steady)  # fmt: skip
+    Fp, Yp = _core.mimo_line_experiments(**args, **common, bins=sphs.harmonics)
+    force, displacement = _core.mimo_experiments(**args, **common, all_forces=True)
+    for lines, x in ((Fp, force), (Yp, displacement)):
+        want = np.fft.rfft(x.reshape(2, 2, periods, L), axis=3)[..., sphs.harmonics].transpose(2, 3, 1, 0)
+        assert lines.shape == (periods, sphs.harmonics.size, 2, 2)
+        assert np.max(np.abs(lines - want)) < 1e-12 * np.max(np.abs(want))
+
+
+def test_steady_force_line_noise_has_the_transducer_variance() -> None:
+    """With steady_start the transducer noise is drawn per period and line: complex normal, variance L sigma^2,
+    independent across periods, lines, channels and experiments; the probe noise enters the loop."""
+    rig = ta.TwoAxisRig.paper()
+    sphs = af.schroeder_multisine(f0=1.0, f_max=200.0)
+    model = loop_model(rig, PID)
+    args = _core_args(model, rig, outputs=2)
+    periods, L = 40, sphs.period_samples
+    common = dict(period_forces=excitation_pair(sphs), settle_periods=0, periods=periods, seeds=[11, 12],
+                  steady_start=True, bins=sphs.harmonics)  # fmt: skip
+    Fp, Yp = _core.mimo_line_experiments(**args, **common)
+    quiet = dict(args, force_noise=np.zeros(2), sensor_noise=np.zeros(2))
+    F0, _ = _core.mimo_line_experiments(**quiet, **common)
+    np.testing.assert_allclose(F0, np.broadcast_to(F0[:1], F0.shape), rtol=0, atol=1e-9 * np.abs(F0).max())
+    noise = Fp - Fp.mean(axis=0)  # the deterministic part is the same every period (to rounding)
+    sigma = np.array([a.force_noise for a in rig.axes])
+    for part in (noise.real, noise.imag):
+        variance = np.mean(part**2, axis=(0, 1, 3)) * periods / (periods - 1)
+        np.testing.assert_allclose(variance, L * sigma**2 / 2, rtol=0.05)  # 16000 draws per channel: 1.1 % rms
+    corr = np.corrcoef(noise[:, :, 0, 0].real.ravel(), noise[:, :, 0, 1].real.ravel())[0, 1]
+    assert abs(corr) < 0.05  # the two experiments' streams are independent
+    assert not np.allclose(Yp, _core.mimo_line_experiments(**quiet, **common)[1])
+    again = _core.mimo_line_experiments(**args, **common)
+    np.testing.assert_array_equal(again[0], Fp)  # reproducible per seed
+    np.testing.assert_array_equal(again[1], Yp)
+
+
+def test_mimo_simulate_is_independent_of_the_kernel_layout(rng) -> None:
+    """The blocked kernel equals the recursion z' = M z + Bf f, o = C z written out (noise-free), on a
+    loop with cross coupling and cross feedback (rows in several passes)."""
+    rig = replace(ta.TwoAxisRig.paper(), kxy=8e3, kyx=-8e3)
+    controller = [[PID, PID], [None, PID]]
+    model = loop_model(rig, controller)
+    force = rng.normal(size=(500, 2))
+    args = _core_args(model, rig)
+    args.update(sensor_noise=np.zeros(2), force_noise=np.zeros(2))
+    _, out = _core.mimo_simulate(**args, force=force)
+    z = np.zeros(model.M.shape[0])
+    want = np.empty((500, 4))
+    for k in range(500):
+        want[k] = model.C @ z
+        z = model.M @ z + model.Bf @ force[k]
+    assert np.max(np.abs(out - want)) <= 1e-12 * np.max(np.abs(want))
