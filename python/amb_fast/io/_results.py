@@ -279,7 +279,42 @@ def write_netcdf(ds, path: str | Path) -> Path:  # noqa: ANN001
     }
     with atomic_path(path) as target:
         ds.to_netcdf(target, engine="h5netcdf", encoding=encoding)
+        with open(target, "ab") as handle:  # HDF5 ignores bytes past its end of file
+            handle.write(FILE_TRAILER + _file_digest(target, target.stat().st_size).encode() + b"\n")
     return Path(path)
+
+
+#: Written after the HDF5 data: the SHA-256 of every byte before it, checked before HDF5 sees the file.
+#: (HDF5 can loop forever on damaged metadata, and fletcher32 covers only the data.)
+FILE_TRAILER = b"\n# amb_fast sha256 "
+_TRAILER_SIZE = len(FILE_TRAILER) + 64 + 1
+
+
+def _file_digest(path: Path, size: int) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as handle:
+        while size > 0:
+            chunk = handle.read(min(size, 1 << 22))
+            if not chunk:
+                break
+            h.update(chunk)
+            size -= len(chunk)
+    return h.hexdigest()
+
+
+def _check_file_digest(path: Path) -> None:
+    """Refuse a file whose trailer's SHA-256 does not match (files without a trailer pass to the other checks)."""
+    size = path.stat().st_size
+    if size < _TRAILER_SIZE:
+        return
+    with open(path, "rb") as handle:
+        handle.seek(size - _TRAILER_SIZE)
+        tail = handle.read()
+    if not tail.startswith(FILE_TRAILER):
+        return
+    stored = tail[len(FILE_TRAILER) : -1].decode(errors="replace")
+    if tail[-1:] != b"\n" or stored != _file_digest(path, size - _TRAILER_SIZE):
+        raise ValueError(f"{path.name} is damaged: its bytes do not match the SHA-256 checksum at its end")
 
 
 def read_netcdf(path: str | Path):  # noqa: ANN201
@@ -289,6 +324,7 @@ def read_netcdf(path: str | Path):  # noqa: ANN201
     except ImportError as error:
         raise ImportError("reading .nc needs xarray and h5netcdf: pip install 'amb_fast[xarray]'") from error
     path = Path(path)
+    _check_file_digest(path)
     try:
         with xr.open_dataset(path, engine="h5netcdf") as ds:
             ds = ds.load()
