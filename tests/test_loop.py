@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -79,3 +80,15 @@ def test_unstable_loop_raises_instead_of_returning_inf(lagged_rig) -> None:
         af.simulate(lagged_rig, too_soft, np.ones(40_000))  # refused before simulating, like run_experiment
     with pytest.raises(OverflowError, match="non-finite.*unstable.*at sample"):  # the core's own check stays
         _core.simulate(lagged_rig._to_core(), too_soft._to_core(), np.ones(40_000), 0)
+
+
+@pytest.mark.parametrize("n", [1, 3, 4, 7, 4001])
+def test_the_force_transducer_records_the_ac_coupled_force(n) -> None:
+    """The recorded force is f - q with q[k+1] = a q[k] + (1 - a) f[k], a = exp(-T/tau) (scipy's lfilter as
+    the reference), at lengths that are and are not multiples of the core's four-sample step."""
+    rig = replace(af.Rig.paper(), sensor_noise=0.0, force_noise=0.0, force_coupling_tau=0.01)
+    force = np.random.default_rng(n).standard_normal(n)
+    trace = af.simulate(rig, af.PID.paper(), force)
+    a = np.exp(-1.0 / (af.PID.paper().fs * 0.01))
+    q = signal.lfilter([0.0, 1.0 - a], [1.0, -a], force)
+    np.testing.assert_allclose(trace.force, force - q, rtol=0, atol=1e-13 * np.max(np.abs(force)))
