@@ -468,8 +468,8 @@ void mimo_line_experiments(const MimoModel& model, const double* const* period_f
         rec_ptr.push_back(rec[static_cast<std::size_t>(l)].data());
         out_ptr.push_back(out[static_cast<std::size_t>(l)].data());
     }
-    Eigen::VectorXd row(L);
-    std::vector<std::complex<double>> spectrum(static_cast<std::size_t>(B));
+    Eigen::VectorXd row(L), row2(L);
+    std::vector<std::complex<double>> spectrum(static_cast<std::size_t>(B)), spectrum2(spectrum.size());
     // lines[((period * B + j) * channels + channel) * K + l] = spectrum[j]
     auto put = [&](std::complex<double>* lines, Eigen::Index period, Eigen::Index channels, Eigen::Index channel,
                    Eigen::Index l) {
@@ -481,7 +481,16 @@ void mimo_line_experiments(const MimoModel& model, const double* const* period_f
         if (k < settle_periods) continue;
         const Eigen::Index period = k - settle_periods;
         for (Eigen::Index l = 0; l < K; ++l) {
-            for (Eigen::Index c = 0; c < q; ++c) {
+            Eigen::Index c = 0;
+            for (; c + 2 <= q; c += 2) {  // two probes at once: the same digits, side by side in SIMD lanes
+                row = out[static_cast<std::size_t>(l)].row(c).transpose();
+                row2 = out[static_cast<std::size_t>(l)].row(c + 1).transpose();
+                transform(row.data(), row2.data(), spectrum.data(), spectrum2.data());
+                put(displacement_lines, period, q, c, l);
+                spectrum.swap(spectrum2);
+                put(displacement_lines, period, q, c + 1, l);
+            }
+            for (; c < q; ++c) {
                 row = out[static_cast<std::size_t>(l)].row(c).transpose();
                 transform(row.data(), spectrum.data());
                 put(displacement_lines, period, q, c, l);
