@@ -1,9 +1,11 @@
 """Gain sweeps: throughput, thread scaling, vectorised prediction and memory, measured in one run.
 
-1. A 1,000-point sweep of the paper experiment (settle + 10 periods at 4 kHz, 200 lines, all lags):
-   experiments per second and the cost per simulated sample per gain set, against one
-   run_experiment and scipy.signal.lfilter on the loop's closed-loop transfer function.
-2. The same sweep on 1 and 2 worker threads.
+1. A 1,000-point kp sweep of the paper experiment as users run it (``Rig.paper()``, ``PID.paper()``,
+   noise on, the default steady start, 10 periods at 4 kHz, 200 lines): experiments per second and
+   the cost per simulated sample per gain set, against one run_experiment and scipy.signal.lfilter on
+   the loop's closed-loop transfer function.
+2. The same sweep on 1 and 2 worker threads, and a 40-point sweep on 1 and 2 (the issue's scaling
+   case: too few points to hide an uneven split).
 3. predict over 10^5 gain sets x 200 lines against a plain loop over gain sets calling predict.
 4. Peak memory of a 10^5-point sweep (10 Hz fundamental, 20 lines) against the size of its estimates.
 
@@ -54,10 +56,9 @@ def main() -> None:
     args = arguments(__doc__, "bench_sweep")
     points, repeats, predict_sets, memory_points = (64, 1, 1_000, 2_000) if args.quick else (1_000, 5, 100_000, 100_000)
 
-    rig = af.Rig(amp_bandwidth=1500.0, eddy_bandwidth=800.0, sensor_bandwidth=5000.0)
-    pid = af.PID(kp=2000.0, ki=20000.0, kd=5.0, derivative_cutoff=1000.0)
+    rig, pid = af.Rig.paper(), af.PID.paper()
     sphs = af.schroeder_multisine()
-    kp = np.linspace(1800.0, 2600.0, points)  # all stable: every point is simulated
+    kp = np.linspace(2000.0, 3000.0, points)  # all stable: every point is simulated
     r = {}
 
     # 1-2. Sweep throughput and scaling.
@@ -66,6 +67,9 @@ def main() -> None:
     samples = float(np.sum(result.settle_periods + result.periods) * sphs.period_samples)
     r["sweep 1 worker s"] = median_seconds(lambda: sweep(1), repeats)
     r["sweep 2 workers s"] = median_seconds(lambda: sweep(2), repeats)
+    few = lambda workers: af.sweep(rig, pid, sphs, kp=kp[:: max(1, points // 40)][:40], workers=workers, progress=False)  # noqa: E731
+    r["40-point sweep 1 worker s"] = median_seconds(lambda: few(1), 3 * repeats)
+    r["40-point sweep 2 workers s"] = median_seconds(lambda: few(2), 3 * repeats)
     single = median_seconds(lambda: af.run_experiment(rig, pid, sphs), 5 * repeats)
     single_samples = (result.settle_periods[0] + result.periods) * sphs.period_samples
     A, B, C, D = af.closed_loop(rig, pid)
@@ -74,7 +78,7 @@ def main() -> None:
     lfilter = median_seconds(lambda: signal.lfilter(b[0], a, force), 5) / force.size
 
     # 3. Vectorised prediction.
-    gains = np.linspace(1800.0, 2600.0, predict_sets)
+    gains = np.linspace(2000.0, 3000.0, predict_sets)
     r["predict vectorised s"] = median_seconds(lambda: af.predict(rig, pid, sphs.freq, kp=gains), repeats)
     loop_sets = max(10, predict_sets // 1000)
     loop = median_seconds(lambda: [af.predict(rig, replace(pid, kp=g), sphs.freq) for g in gains[:loop_sets]], repeats)
@@ -84,7 +88,7 @@ def main() -> None:
     coarse = af.schroeder_multisine(f0=10.0, f_max=200.0)
     reset_peak_rss()
     before = rss_bytes()
-    big = af.sweep(rig, pid, coarse, kp=np.linspace(1800.0, 2600.0, memory_points), workers=2, progress=False)
+    big = af.sweep(rig, pid, coarse, kp=np.linspace(2000.0, 3000.0, memory_points), workers=2, progress=False)
     grown = peak_rss_bytes() - before
     estimates = sum(getattr(big, n).nbytes for n in ("H", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std"))
 
@@ -96,7 +100,9 @@ def main() -> None:
         "ns per sample, single run_experiment": single / single_samples * 1e9,
         "ns per sample, lfilter": lfilter * 1e9,
         "sweep (1 worker) per sample per set / lfilter (goal <= 1)": per_set_sample_1 / lfilter,
-        "scaling 1 -> 2 workers (goal >= 1.8)": r["sweep 1 worker s"] / r["sweep 2 workers s"],
+        "scaling 1 -> 2 workers (goal >= 1.7)": r["sweep 1 worker s"] / r["sweep 2 workers s"],
+        "scaling 1 -> 2 workers, 40 points (goal >= 1.7)": r["40-point sweep 1 worker s"]
+        / r["40-point sweep 2 workers s"],
         "predict: gain sets x lines per second": predict_sets * sphs.freq.size / r["predict vectorised s"],
         "predict: loop / vectorised": r["predict loop s (extrapolated)"] / r["predict vectorised s"],
         "memory sweep: points": memory_points,

@@ -42,6 +42,8 @@ GENERATED = DOCS / "_generated"
 
 # Each benchmark: what it measures, the unit its seconds are shown in and the scale to get there.
 BENCHMARKS = {
+    "bench_experiment": ("The paper experiment as users run it, against a vectorised scipy script", "ms", 1e3),
+    "bench_two_axis": ("Two axes: one two-axis experiment against one one-axis experiment", "ms", 1e3),
     "bench_core": ("The simulation loop, time per simulated sample", "ns/sample", 1e9),
     "bench_identify": ("One experiment and identification of a long recording", "ms", 1e3),
     "bench_sweep": ("Gain sweeps: throughput, thread scaling, vectorised predict, memory", "s", 1.0),
