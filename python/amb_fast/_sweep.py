@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
+from ._blas import one_blas_thread
 from ._dispatch import two_axis_aware
 from ._excitation import Multisine
 from ._experiment import _plan, _window, automatic_settle
@@ -432,6 +433,7 @@ def _progress_bar(progress: bool | None, total: int):  # noqa: ANN202
 
 
 @two_axis_aware
+@one_blas_thread
 def sweep(
     rig: Rig | Factory,
     controller: AnyController | Multisine,

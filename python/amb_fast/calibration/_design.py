@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import optimize
 
+from .._blas import one_blas_thread
 from .._linear import (
     AnyController,
     closed_loop_poles,
@@ -157,6 +158,7 @@ def _target(name: str, value: Any, freq: np.ndarray) -> np.ndarray | None:
     return array
 
 
+@one_blas_thread
 def design_controller(
     rig: Rig,
     controller: AnyController,

@@ -10,6 +10,7 @@ from typing import Any, Union
 import numpy as np
 from scipy import optimize, stats
 
+from .._blas import one_blas_thread
 from .._experiment import Estimate
 from .._linear import (
     AnyController,
@@ -145,6 +146,7 @@ class RigFit:
         var = np.einsum("...i,ij,...j->...", J, self._cov_x, J)
         return centre, np.sqrt(np.maximum(var, 0.0))
 
+    @one_blas_thread
     def predict(self, controller: AnyController, freq: Any) -> tuple[np.ndarray, np.ndarray]:
         """Receptance Y/F (m/N) of the calibrated rig under ``controller`` at ``freq`` (Hz), and its standard
         error ``sqrt(E|dR|^2)`` (m/N, real) propagated from the parameter covariance."""
@@ -157,6 +159,7 @@ class RigFit:
         (re, im), (re_std, im_std) = self._propagate(evaluate)
         return re + 1j * im, np.hypot(re_std, im_std)
 
+    @one_blas_thread
     def coefficients(
         self, controller: AnyController, freq: Any
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -372,6 +375,7 @@ class _Model:
         return [(1.0 - Pu[rows] * G) * Tr[rows] / Pf[rows] for rows, G in zip(self.index, self.G)]
 
 
+@one_blas_thread
 def fit_rig(
     estimates: Estimate | Sequence[Estimate],
     rig: Rig,

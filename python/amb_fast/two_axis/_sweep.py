@@ -14,6 +14,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._blas import one_blas_thread
 from .._errors import UnstableLoopError
 from .._excitation import Multisine, schroeder_multisine
 from .._linear import AnyController
@@ -105,6 +106,7 @@ def point_model2(rig: TwoAxisRig, controller: ControllerSpec, values: dict[str, 
     return replace(rig, x=x, y=y, **changes), ControllerMatrix((tuple(entries[0]), tuple(entries[1])), spec.fs)  # type: ignore[arg-type]
 
 
+@one_blas_thread
 def sweep(
     rig: TwoAxisRig,
     controller: ControllerSpec,
