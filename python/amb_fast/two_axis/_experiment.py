@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any, Literal
 
 import numpy as np
@@ -43,10 +44,12 @@ class Trace2:
     current: np.ndarray
     fs: float
 
-    @property
+    @cached_property
     def time(self) -> np.ndarray:
-        """Sample instants kT, s."""
-        return np.arange(self.force.shape[0]) / self.fs
+        """Sample instants kT, s (computed once, read-only)."""
+        t = np.arange(self.force.shape[0]) / self.fs
+        t.flags.writeable = False
+        return t
 
 
 def _core_args(model: LoopModel, rig: TwoAxisRig, outputs: int = 4) -> dict[str, np.ndarray]:
