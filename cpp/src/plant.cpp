@@ -135,6 +135,10 @@ CascadeMap::CascadeMap(const SampleMap& map) {
     y_u = map.G0[y], v_u = map.G0[v], i_u = map.G0[i], f_u = map.G0[i_f], s_u = map.G0[ys];
     y_p = map.G1[y], v_p = map.G1[v], i_p = map.G1[i], f_p = map.G1[i_f], s_p = map.G1[ys];
     fractional = !map.G1.isZero(0.0);
+#if AMB_FAST_PAIRED_MAP
+    pair_y = Pair{yy, vy}, pair_v = Pair{yv, vv}, pair_i = Pair{yi, vi}, pair_f = Pair{yf, vf};
+    pair_force = Pair{y_f, v_f}, pair_u = Pair{y_u, v_u};
+#endif
 }
 
 int force_current_index(const Rig& rig) {

@@ -107,12 +107,24 @@ SampleMap sample_map(const Rig& rig, double T);
 // its 25 entries can be non-zero, and only those are multiplied. The loops that use it are bound by
 // the latency of the sample-to-sample chain, so independent terms are summed pairwise. Every loop
 // (single runs and batched sweeps) calls this one function, so all agree bit for bit.
+#if defined(__GNUC__) || defined(__clang__)
+#define AMB_FAST_PAIRED_MAP 1
+#else
+#define AMB_FAST_PAIRED_MAP 0
+#endif
+
 struct CascadeMap {
     explicit CascadeMap(const SampleMap& map);  // throws std::logic_error if the map lost the structure
 
     void advance(double& xy, double& xv, double& xi, double& xf, double& xs, double f, double u) const {
+#if AMB_FAST_PAIRED_MAP
+        // y and v rows side by side: each lane does the scalar rows' operations in their order.
+        const Pair n = ((pair_y * xy + pair_v * xv) + (pair_i * xi + pair_f * xf)) + (pair_force * f + pair_u * u);
+        const double ny = n[0], nv = n[1];
+#else
         const double ny = (yy * xy + yv * xv) + (yi * xi + yf * xf) + (y_f * f + y_u * u);
         const double nv = (vy * xy + vv * xv) + (vi * xi + vf * xf) + (v_f * f + v_u * u);
+#endif
         const double ns = ((sy * xy + sv * xv) + (si * xi + sf * xf)) + (ss * xs + (s_f * f + s_u * u));
         xf = (fi * xi + ff * xf) + f_u * u;
         xi = ii * xi + i_u * u;
@@ -136,6 +148,10 @@ struct CascadeMap {
     double y_f, v_f, s_f, y_u, v_u, i_u, f_u, s_u;                         // Gf, G0: force, command
     double y_p, v_p, i_p, f_p, s_p;                                        // G1: previous command
     bool fractional;                                                       // G1 != 0
+#if AMB_FAST_PAIRED_MAP
+    using Pair = double __attribute__((vector_size(16)));
+    Pair pair_y, pair_v, pair_i, pair_f, pair_force, pair_u;  // the y and v rows' coefficients, paired
+#endif
 };
 
 // Linear(ised) continuous model x' = A x + B [f, i_cmd].
