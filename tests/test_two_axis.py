@@ -324,3 +324,18 @@ def test_command_line_two_axis_run(tmp_path, capsys) -> None:
     assert main(["run", "--kxy", "1e4"]) == 2
     assert "need --two-axis" in capsys.readouterr().err
     assert main(["run", "--two-axis", "--save", str(tmp_path / "two.nc")]) == 2
+
+
+def test_to_ross_keeps_the_callers_standard_output_clean() -> None:
+    """Importing ROSS prints a REFPROP banner from a C library (CoolProp, through ccp); to_ross silences it."""
+    import subprocess
+    import sys
+
+    pytest.importorskip("ross")
+    code = (
+        "import amb_fast as af\n"
+        "est = af.run_experiment(af.Rig.paper(), af.PID.paper(), af.schroeder_multisine(f_max=20.0), periods=3)\n"
+        "print(type(est.to_ross(0)).__name__)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out == "BearingElement\n"
