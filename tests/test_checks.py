@@ -24,7 +24,8 @@ def recording() -> tuple[np.ndarray, np.ndarray]:
 
 def ident(force, displacement, **kwargs):  # noqa: ANN001, ANN003, ANN201
     kwargs.setdefault("settle_periods", 4)
-    return af.identify(force, displacement, fs=FS, f0=1.0, mass=0.92, **kwargs)
+    kwargs.setdefault("mass", 0.92)
+    return af.identify(force, displacement, fs=FS, f0=1.0, **kwargs)
 
 
 def test_a_settled_recording_passes_without_warnings(recording) -> None:
@@ -76,8 +77,10 @@ def test_a_start_transient_kept_is_warned_about(recording) -> None:
         (lambda f, y: (f, y), {"clearance": 2e-5}, "above the clearance 2e-05 m"),
         (lambda f, y: (y, f), {}, "force and displacement look swapped"),
         (lambda f, y: (f * 1e6, y), {}, "median stiffness .* is outside 100-1e\\+09 N/m"),
+        (lambda f, y: (f / 1e3, y), {}, "force is .* of what accelerating the given mass takes.*kN instead of N"),
+        (lambda f, y: (f, y), {"mass": 920.0}, "or the mass not in kg"),
     ],
-    ids=["millimetres", "clearance", "swapped", "stiffness-range"],
+    ids=["millimetres", "clearance", "swapped", "stiffness-range", "kilonewtons", "grams"],
 )
 def test_plausibility_warnings_for_unit_mistakes(recording, change, kwargs, message) -> None:
     force, displacement = change(*recording)

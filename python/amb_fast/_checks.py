@@ -4,7 +4,8 @@
 - Lines whose force or displacement is under ``WEAK`` times the unexcited level: flagged (``Estimate.weak``).
 - The first periods differing from the last beyond the period-to-period scatter (a start transient kept): a warning.
 - Implausible magnitudes (stiffness outside 1e2-1e9 N/m, a displacement above 10 mm or the clearance,
-  force and displacement swapped): warnings that name the likely unit mistake.
+  force and displacement swapped, a force too small to have moved the given mass): warnings that name
+  the likely unit mistake.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ WEAK = 10.0  # a line is weak under this many times the unexcited level
 EXCITED = 3.0  # the excited lines as a whole must be this far above the unexcited level
 TRANSIENT = 4.0  # first-vs-last difference over the consecutive-period scatter that warns
 STIFFNESS = (1e2, 1e9)  # N/m
+TOO_LIGHT = 0.05  # median |F/Y| / (m w^2) below which the force cannot have moved the given mass
 DISPLACEMENT = 10e-3  # m
 
 
@@ -115,14 +117,31 @@ def warn_transient(displacement: np.ndarray, period: int, stacklevel: int = 3) -
 
 
 def warn_implausible(
-    k: np.ndarray, H: np.ndarray, displacement: np.ndarray, clearance: float | None, stacklevel: int = 3
+    k: np.ndarray,
+    H: np.ndarray,
+    displacement: np.ndarray,
+    clearance: float | None,
+    stacklevel: int = 3,
+    inertia: np.ndarray | None = None,
 ) -> None:
-    """Warnings for magnitudes that point to a unit mistake or swapped channels."""
+    """Warnings for magnitudes that point to a unit mistake or swapped channels.
+
+    ``inertia``: m w^2 at each line (N/m). Whatever the bearing does, |F/Y| = |K_b(w) - m w^2| stays near or
+    above m w^2 except in a narrow band around a resonance; a force far below that at most lines is
+    not the force that moved this mass (kN read as N, or the mass in g).
+    """
     stiffness = float(np.median(np.abs(k)))
     dynamic = float(np.median(np.abs(H)))
     if dynamic < 1.0:
         warnings.warn(
             f"the median |F/Y| is {dynamic:.3g} N/m: force and displacement look swapped (or not in N and m)",
+            stacklevel=stacklevel,
+        )
+    elif inertia is not None and inertia.size and float(np.median(np.abs(H) / inertia)) < TOO_LIGHT:
+        ratio = float(np.median(np.abs(H) / inertia))
+        warnings.warn(
+            f"the force is {ratio:.2g} of what accelerating the given mass takes (median |F/Y| / (m w^2) over "
+            "the lines): is the force in kN instead of N, or the mass not in kg?",
             stacklevel=stacklevel,
         )
     elif not STIFFNESS[0] <= stiffness <= STIFFNESS[1]:

@@ -340,7 +340,9 @@ def identify(
     displacement_noise = _checks.noise_levels(displacement[start:], period, harmonics, raw.unexcited_displacement)
     weak = _checks.weak_lines(raw.force, raw.displacement, force_noise, displacement_noise)
     _checks.warn_transient(displacement[start:], period)
-    _checks.warn_implausible(raw.k, raw.H, displacement[max(start, whole - 16 * period) :], clearance)
+    inertia = mass * (2 * np.pi * harmonics * fs / period) ** 2
+    _checks.warn_implausible(raw.k, raw.H, displacement[max(start, whole - 16 * period) :], clearance,
+                             inertia=inertia)  # fmt: skip
     meta = {"source": "identify", "rig": None, "controller": None, "seed": None, "fs": fs, "f0": f0, "mass": mass,
             "settle_periods": settle_periods}  # fmt: skip
     return _estimate(raw, harmonics, unexcited, f0, meta=meta, weak=weak)
