@@ -6,13 +6,18 @@ to current command in A), its constructors (``Controller.from_tf``, ``from_zpk``
 :func:`low_pass`, :func:`lead_lag`, :func:`second_order`, :func:`gain`, :func:`pure_delay`,
 :func:`pid_controller`), their combination (:func:`series`, :func:`parallel`, ``*``, ``+``) and the
 controller file format (:func:`load_controller`). See ``docs/controllers.md``.
+
+Modules: ``_controller`` (the class and its algebra), ``_statespace`` (realisations as state spaces and
+the discretisation of continuous designs), ``_blocks`` (the blocks of the field), ``_file`` (controller
+files).
 """
 
 from __future__ import annotations
 
 from ._blocks import lead_lag, low_pass, notch, pid_controller, second_order
-from ._controller import MAX_ORDER, Controller, gain, parallel, pure_delay, series
+from ._controller import Controller, gain, parallel, pure_delay, series
 from ._file import load_controller
+from ._statespace import MAX_ORDER
 
 __all__ = [
     "MAX_ORDER",

@@ -10,7 +10,8 @@ import numpy as np
 from scipy import signal
 
 from .._validate import integer, real, require
-from ._controller import _REBUILDERS, MAX_ORDER, Controller, _discretise
+from ._controller import _REBUILDERS, Controller
+from ._statespace import MAX_ORDER, _discretise
 
 if TYPE_CHECKING:
     from .._params import PID
