@@ -34,7 +34,8 @@ from ._linear import (
 )
 from ._params import PID, Rig
 from ._simulate import Trace, simulate
-from ._sweep import SweepResult, load_sweep, sweep
+from ._sweep import sweep
+from ._sweep_result import SweepResult, load_sweep
 from .calibration import Design, RigFit, design_controller, fit_rig
 from .controllers import (
     Controller,

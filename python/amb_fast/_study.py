@@ -12,7 +12,8 @@ from ._excitation import Multisine, schroeder_multisine
 from ._experiment import Estimate, run_experiment
 from ._linear import effective_coefficients
 from ._params import PID, Rig
-from ._sweep import SweepResult, sweep
+from ._sweep import sweep
+from ._sweep_result import SweepResult
 from ._validate import real, require
 
 GAINS = ("ki", "kd", "kp")  # the paper's order: sections 3.2.1, 3.2.2, 3.2.3

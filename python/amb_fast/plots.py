@@ -16,7 +16,7 @@ if TYPE_CHECKING:
 
     from ._experiment import Estimate
     from ._study import PaperStudy
-    from ._sweep import SweepResult
+    from ._sweep_result import SweepResult
 
 LABELS = {"kp": ("K_p", "A/m"), "ki": ("K_i", "A/(m s)"), "kd": ("K_d", "A s/m")}
 

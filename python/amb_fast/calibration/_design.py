@@ -22,7 +22,8 @@ from .._linear import (
     stability_margin,
 )
 from .._params import PID, Rig
-from .._sweep import RIG_FIELDS, point_model, unit_of
+from .._sweep import RIG_FIELDS, point_model
+from .._sweep_result import unit_of
 
 GAINS = ("kp", "ki", "kd")
 _GRID_POINTS = 1500  # sensitivity grid of the constraint during the search (the result is checked on 20000)

@@ -1,0 +1,271 @@
+"""A sweep's results: :class:`SweepResult` (estimates of every point, labelled by the swept parameters; xarray,
+NetCDF and npz) and :func:`load_sweep`. Running sweeps is ``amb_fast._sweep``."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._validate import require
+
+
+def _version() -> str:
+    from . import __version__
+
+    return __version__
+
+
+SWEPT = ("kp", "ki", "kd")  # the PID gains: swept together in closed form
+STATUS = ("ok", "unstable", "touchdown", "saturated")  # index = the core's PointStatus
+UNITS = {
+    "kp": "A/m", "ki": "A/(m s)", "kd": "A s/m", "derivative_cutoff": "Hz", "mass": "kg", "kyy": "N/m",
+    "kiy": "N/A", "bias_current": "A", "amp_bandwidth": "Hz", "eddy_bandwidth": "Hz", "sensor_bandwidth": "Hz",
+    "sensor_noise": "m rms", "force_noise": "N rms", "mass_loading": "kg", "force_coupling_tau": "s",
+    "clearance": "m", "current_limit": "A",
+}  # fmt: skip
+
+
+def unit_of(name: str) -> str:
+    """Unit of a sweep axis: a rig or PID field's, Hz for a block's frequency, else ``""``."""
+    if name in UNITS:
+        return UNITS[name]
+    return "Hz" if name.endswith("_freq") or name.endswith("_width") else ""
+
+
+# Labelled in Python: the core reports a linear-law point whose state overflowed as "touchdown" (it
+# reached an infinite clearance); without a clearance that is an overflow (saturation made it diverge).
+OVERFLOW = "overflow"
+STATUS_NAMES = (*STATUS, OVERFLOW)
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """Estimates of every point of a sweep, in grid order; what :func:`sweep` returns.
+
+    Attributes
+    ----------
+    points : dict of str to ndarray
+        Each swept parameter's value at every point (units: :func:`unit_of`, e.g. A/m for kp).
+    axes : dict of str to ndarray
+        The values given for each swept parameter; for ``grid="product"`` the grid's shape is their
+        lengths (C order: the last name varies fastest).
+    grid : {"product", "zip"}
+        How the axes were combined.
+    freq : ndarray
+        Excited lines, Hz.
+    H, k, c, k_smooth, c_smooth, k_std, c_std : ndarray
+        Shape (points, lines), as in :class:`Estimate`: ``H`` (complex), ``k``, ``k_smooth``, ``k_std``
+        in N/m; ``c``, ``c_smooth``, ``c_std`` in N s/m. NaN where status is not ok.
+    status : ndarray of str
+        "ok"; "unstable" (a linearised pole on or outside the unit circle, found before simulating);
+        "touchdown" (the platform reached its clearance, or the air gap with the non-linear law);
+        "saturated" (the amplifier clipped: ``Rig.current_limit``); "overflow" (a linear-law point whose
+        state stopped being finite, e.g. diverging under saturation, with no clearance to touch).
+    settle_periods, seeds : ndarray
+        What each point ran with (periods; uint64 seeds): ``run_experiment(rig, pid_i, excitation,
+        periods=periods, seed=int(seeds[i]))`` reproduces point i bit for bit.
+    unexcited_freq : ndarray
+        Unexcited harmonics, Hz; ``unexcited_displacement`` (points, lines) their levels, m.
+    periods, blocks : int
+        Periods averaged per point; independent groups behind the standard errors.
+    meta : dict
+        What produced the sweep, saved with it: the rig's fields, the controller, ``f0`` and ``fs``
+        (Hz), the base seed and the amb_fast version.
+
+    See Also
+    --------
+    sweep, load_sweep, plot_family
+
+    Examples
+    --------
+    >>> result = af.sweep(af.Rig.paper(), af.PID.paper(), af.schroeder_multisine(), kp=[2000.0, 2400.0],
+    ...                   kd=[2.0, 3.0, 4.0], seed=1, progress=False)
+    >>> result.shape, result.k.shape                        # a 2 x 3 grid of 200 lines each
+    ((2, 3), (6, 200))
+    >>> k = result.k.reshape(*result.shape, -1)             # (kp, kd, lines), N/m
+    >>> result.to_xarray().k.dims
+    ('kp', 'kd', 'freq')
+    """
+
+    points: dict[str, np.ndarray]
+    axes: dict[str, np.ndarray]
+    grid: str
+    freq: np.ndarray
+    H: np.ndarray
+    k: np.ndarray
+    c: np.ndarray
+    k_smooth: np.ndarray
+    c_smooth: np.ndarray
+    k_std: np.ndarray
+    c_std: np.ndarray
+    status: np.ndarray
+    settle_periods: np.ndarray
+    seeds: np.ndarray
+    unexcited_freq: np.ndarray
+    unexcited_displacement: np.ndarray
+    periods: int
+    blocks: int
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Grid shape: one axis per swept parameter for product grids, else (points,)."""
+        if self.grid == "product":
+            return tuple(len(v) for v in self.axes.values())
+        return (len(self.status),)
+
+    def to_xarray(self):  # noqa: ANN201 - xarray is optional
+        """An ``xarray.Dataset`` with one dimension per swept parameter (product grids) or ``point``, and ``freq``."""
+        try:
+            import xarray as xr
+        except ImportError as error:
+            raise ImportError("to_xarray needs xarray: pip install 'amb_fast[xarray]'") from error
+        if self.grid == "product":
+            dims = list(self.axes)
+            coords: dict[str, Any] = {
+                name: (name, values, {"units": unit_of(name)}) for name, values in self.axes.items()
+            }
+        else:
+            dims = ["point"]
+            coords = {name: ("point", values, {"units": unit_of(name)}) for name, values in self.points.items()}
+        coords["freq"] = ("freq", self.freq, {"units": "Hz"})
+        coords["unexcited_freq"] = ("unexcited_freq", self.unexcited_freq, {"units": "Hz"})
+        shape = self.shape
+
+        def var(values: np.ndarray, units: str, lines: str = "freq") -> tuple:
+            return ([*dims, lines], values.reshape(*shape, values.shape[-1]), {"units": units})
+
+        data = {
+            "H": var(self.H, "N/m"),
+            "k": var(self.k, "N/m"),
+            "c": var(self.c, "N s/m"),
+            "k_smooth": var(self.k_smooth, "N/m"),
+            "c_smooth": var(self.c_smooth, "N s/m"),
+            "k_std": var(self.k_std, "N/m"),
+            "c_std": var(self.c_std, "N s/m"),
+            "unexcited_displacement": var(self.unexcited_displacement, "m", "unexcited_freq"),
+            "status": (dims, self.status.reshape(shape)),
+            "settle_periods": (dims, self.settle_periods.reshape(shape)),
+            "seeds": (dims, self.seeds.reshape(shape)),
+        }
+        attrs = {"grid": self.grid, "periods": self.periods, "blocks": self.blocks, "meta": json.dumps(self.meta),
+                 "axes": json.dumps(list(self.axes))}  # fmt: skip
+        return xr.Dataset(data, coords=coords, attrs=attrs)
+
+    def to_dataframe(self):  # noqa: ANN201 - pandas is optional
+        """A ``pandas.DataFrame``: one row per point and line (swapped gains, status, freq_Hz, estimates)."""
+        from .io._results import sweep_to_dataframe
+
+        return sweep_to_dataframe(self)
+
+    def save(self, path: str | Path) -> None:
+        """Write atomically to ``.nc`` (NetCDF via xarray and h5netcdf; H as real and imaginary parts;
+        fletcher32 and a SHA-256 checked by :func:`load_sweep`) or ``.npz`` (zip CRC-32 per array)."""
+        from .io import atomic_path, write_netcdf
+
+        path = Path(path)
+        if path.suffix == ".nc":
+            ds = self.to_xarray()
+            ds["H_real"], ds["H_imag"] = ds.H.real, ds.H.imag
+            write_netcdf(ds.drop_vars("H").assign(status=ds.status.astype(str)), path)
+        elif path.suffix == ".npz":
+            arrays = {name: getattr(self, name) for name in _ARRAYS}
+            arrays |= {f"point_{k}": v for k, v in self.points.items()} | {f"axis_{k}": v for k, v in self.axes.items()}
+            header = {"grid": self.grid, "periods": self.periods, "blocks": self.blocks, "meta": self.meta}
+            with atomic_path(path) as target, open(target, "wb") as handle:
+                np.savez_compressed(handle, header=json.dumps(header), **arrays)
+        else:
+            raise ValueError(f"path must end in .nc or .npz, got {str(path)!r}")
+
+
+_ARRAYS = ("freq", "H", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std", "status", "settle_periods", "seeds",
+           "unexcited_freq", "unexcited_displacement")  # fmt: skip
+
+
+def load_sweep(path: str | Path) -> SweepResult:
+    """Read a sweep written by :meth:`SweepResult.save` (``.nc`` or ``.npz``).
+
+    Parameters
+    ----------
+    path : str or path-like
+        A ``.nc`` (NetCDF: needs the ``xarray`` extra) or ``.npz`` file written by :meth:`SweepResult.save`.
+
+    Returns
+    -------
+    SweepResult
+        The sweep as saved: gains in their units (A/m, A/(m s), A s/m, Hz), ``freq`` in Hz, ``k`` N/m,
+        ``c`` N s/m, statuses and seeds. A file whose checksums do not match (fletcher32 and SHA-256 in
+        NetCDF, CRC-32 in ``.npz``) is refused with a ``ValueError``, and so is another suffix.
+
+    See Also
+    --------
+    SweepResult.save, sweep
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> result = af.sweep(af.Rig.paper(), af.PID.paper(), af.schroeder_multisine(), kd=[2.0, 3.0],
+    ...                   seed=1, progress=False)
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "kd.npz"
+    >>> result.save(path)
+    >>> back = af.load_sweep(path)
+    >>> bool(np.array_equal(back.k, result.k)), back.points["kd"]
+    (True, array([2., 3.]))
+    """
+    path = Path(path)
+    require(path.is_file(), "path", str(path), "an existing file")
+    from .io import read_netcdf
+    from .io._results import read_npz
+
+    if path.suffix == ".npz":
+        f = read_npz(path)  # a damaged member fails its CRC-32 and is refused
+        header = json.loads(str(f["header"]))
+        arrays = {name: f[name] for name in _ARRAYS}
+        points = {k[6:]: f[k] for k in f if k.startswith("point_")}
+        axes = {k[5:]: f[k] for k in f if k.startswith("axis_")}
+        return SweepResult(points=points, axes=axes, **arrays, **header)
+    if path.suffix != ".nc":
+        raise ValueError(f"path must end in .nc or .npz, got {str(path)!r}")
+    ds = read_netcdf(path)  # refuses a file whose checksums do not match
+    grid = ds.attrs["grid"]
+    names = json.loads(ds.attrs["axes"]) if "axes" in ds.attrs else [n for n in SWEPT if n in ds.coords]
+    n_dims = len(names) if grid == "product" else 1
+
+    n_points = int(ds.status.size)
+
+    def rows(name: str) -> np.ndarray:
+        values = np.asarray(ds[name].values)
+        return values.reshape(n_points, *values.shape[n_dims:])
+
+    if grid == "product":
+        axes = {n: np.asarray(ds[n].values) for n in names}
+        mesh = np.meshgrid(*axes.values(), indexing="ij")
+        points = {n: m.ravel() for n, m in zip(names, mesh)}
+    else:
+        points = {n: np.asarray(ds[n].values) for n in names}
+        axes = dict(points)
+    return SweepResult(
+        points=points,
+        axes=axes,
+        grid=grid,
+        freq=np.asarray(ds.freq.values),
+        H=rows("H_real") + 1j * rows("H_imag"),
+        k=rows("k"),
+        c=rows("c"),
+        k_smooth=rows("k_smooth"),
+        c_smooth=rows("c_smooth"),
+        k_std=rows("k_std"),
+        c_std=rows("c_std"),
+        status=rows("status").astype(str),
+        settle_periods=rows("settle_periods"),
+        seeds=rows("seeds").astype(np.uint64),
+        unexcited_freq=np.asarray(ds.unexcited_freq.values),
+        unexcited_displacement=rows("unexcited_displacement"),
+        periods=int(ds.attrs["periods"]),
+        blocks=int(ds.attrs["blocks"]),
+        meta=json.loads(ds.attrs["meta"]),
+    )
