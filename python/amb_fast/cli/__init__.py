@@ -1,0 +1,196 @@
+"""The ``amb-fast`` command (also ``python -m amb_fast``).
+
+SI units on every option: forces in N, displacements in m, gains in A/m (kp), A/(m s) (ki) and
+A s/m (kd), bandwidths and frequencies in Hz, masses in kg, time constants in s.
+
+Every expected error is one line on stderr, ``amb-fast: error: ...``, with exit status 2 for a
+mistake in the command line or its input files (found before any work starts: options, output
+paths, the recording) and 1 for a run that failed (touchdown, overflow, a failed write); a traceback
+only with ``--debug``. Warnings are one line each, ``amb-fast: warning: ...``. No output file is
+overwritten without ``--overwrite``, and every file is written atomically.
+
+Modules: ``_options`` (shared options, output checks, the model), ``_commands`` (run, sweep, identify,
+paper); ``fit`` and ``design`` live in :mod:`amb_fast.calibration`, the two-axis options in
+:mod:`amb_fast.two_axis`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+import time
+import traceback
+import warnings
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .._errors import TouchdownError
+from ..two_axis import add_two_axis_options
+from ._commands import (
+    cmd_identify,
+    cmd_paper,
+    cmd_run,
+    cmd_sweep,
+)
+from ._options import (
+    PID_OPTIONS,
+    UsageError,
+    _add_model_options,
+    _Parser,
+    _values,
+)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    common = _Parser(add_help=False)
+    common.add_argument("--overwrite", action="store_true", help="replace existing output files")
+    common.add_argument("--debug", action="store_true", help="show the traceback of an error")
+    parser = _Parser(
+        prog="amb-fast",
+        allow_abbrev=False,
+        description="Simulate and identify a digitally controlled active magnetic bearing (paper rig by default). "
+        "SI units: N, m, A, s, kg; frequencies in Hz; gains kp A/m, ki A/(m s), kd A s/m.",
+    )
+    parser.add_argument("--version", action="version", version=f"amb-fast {_version()}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="{paper,run,sweep,identify,fit,design}",
+                                parser_class=_Parser)  # fmt: skip
+
+    paper = sub.add_parser(
+        "paper",
+        allow_abbrev=False,
+        parents=[common],
+        help="reproduce the paper: figures, curves (CSV, NetCDF) and claims report",
+    )
+    paper.add_argument("--out", type=Path, default=Path("paper-output"), help="output folder (default paper-output)")
+    paper.add_argument("--seed", type=int, default=2026, help="seed of the measurement noise")
+    paper.add_argument("--no-progress", action="store_true", help="no progress lines")
+    paper.set_defaults(func=cmd_paper)
+
+    run = sub.add_parser("run", allow_abbrev=False, parents=[common], help="one SPHS experiment; prints a summary")
+    _add_model_options(run)
+    run.add_argument("--at", type=_values, default=np.array([10.0, 40.0, 100.0, 200.0]),
+                     help="lines to tabulate (Hz, 'a,b,c'; default 10,40,100,200)")  # fmt: skip
+    run.add_argument("--save", type=Path, help="write the estimate (.csv or .nc; load with amb_fast.load_estimate; "
+                     "with --two-axis .csv or .npz)")  # fmt: skip
+    run.add_argument("--figure", type=Path, help="write a figure (.png, .pdf or .svg)")
+    add_two_axis_options(run)
+    run.set_defaults(func=cmd_run)
+
+    sw = sub.add_parser("sweep", allow_abbrev=False, parents=[common], help="a gain grid to NetCDF (.nc), .npz or CSV")
+    _add_model_options(sw, gains=False)
+    for name, (_, unit, text) in list(PID_OPTIONS.items())[:3]:
+        sw.add_argument(f"--{name}", type=_values, help=f"{text} values ({unit}): 'a,b,c' or 'start:stop:count'")
+    sw.add_argument("--grid", choices=["product", "zip"], default="product", help="cross the values or pair them")
+    sw.add_argument("--workers", type=int, help="threads (default: all cores)")
+    sw.add_argument(
+        "--out", default="sweep.nc", help="output file: .nc (needs amb_fast[xarray]), .npz or .csv (default sweep.nc)"
+    )
+    sw.add_argument("--no-progress", action="store_true", help="no progress bar")
+    sw.set_defaults(func=cmd_sweep)
+
+    ident = sub.add_parser(
+        "identify",
+        allow_abbrev=False,
+        parents=[common],
+        help="k and c from a recording (.csv/.tsv/.txt with named columns, .mat incl. v7.3, .tdms)",
+    )
+    ident.add_argument("file", type=Path, help="recording: .csv/.tsv/.txt (a header names the columns), .mat, .tdms")
+    ident.add_argument(
+        "--force",
+        default="force",
+        help="force channel: name or 0-based column index (N, or a unit in its name; default 'force')",
+    )
+    ident.add_argument(
+        "--displacement",
+        default="displacement",
+        help="displacement channel: name or 0-based column index (m, or a unit in its name)",
+    )
+    ident.add_argument("--recording", help="which recording of a file that holds several (dSPACE export, TDMS group)")
+    ident.add_argument(
+        "--fs", type=float, help="sampling frequency (Hz; default: from 'fs' or the time column, which it must match)"
+    )
+    ident.add_argument("--clearance", type=float, help="mechanical clearance (m): warn if the displacement exceeds it")
+    ident.add_argument("--f0", type=float, default=1.0, help="fundamental (Hz; default 1)")
+    ident.add_argument("--mass", type=float, default=0.92, help="known moving mass (kg; default 0.92)")
+    ident.add_argument("--f-max", type=float, help="highest excited line (Hz; default: detected from the force)")
+    ident.add_argument(
+        "--settle-periods",
+        type=int,
+        default=0,
+        help="periods to skip at the start (a warning says when a transient is left in)",
+    )
+    ident.add_argument("--median-window", type=int, default=5, help="median filter width (lines, odd)")
+    ident.add_argument("--out", type=Path, default=Path("identify-output"), help="output folder")
+    ident.set_defaults(func=cmd_identify)
+
+    from ..calibration._cli import add_design_parser, add_fit_parser
+
+    add_fit_parser(sub, parents=[common])
+    add_design_parser(sub, parents=[common])
+    return parser
+
+
+def _version() -> str:
+    from .. import __version__
+
+    return __version__
+
+
+def _one_line(
+    message: Warning | str, category: type[Warning], filename: str, lineno: int, file=None, line=None
+) -> None:  # noqa: ANN001
+    print(f"amb-fast: warning: {message}", file=sys.stderr)
+
+
+EXPECTED = (UsageError, ValueError, OSError, ImportError, TouchdownError, OverflowError, MemoryError)
+
+
+#: A negative number in any notation argparse would mistake for an option ("-1e4", "-.5", "-inf").
+_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-inf$", re.IGNORECASE)
+
+
+def _join_negative_values(argv: Sequence[str]) -> list[str]:
+    """``--kyx -1e4`` -> ``--kyx=-1e4``: argparse reads only plain negatives ("-5", "-0.5") as values."""
+    out: list[str] = []
+    for token in argv:
+        if _NEGATIVE_NUMBER.match(token) and out and out[-1].startswith("--") and "=" not in out[-1]:
+            out[-1] = f"{out[-1]}={token}"
+        else:
+            out.append(token)
+    return out
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(_join_negative_values(sys.argv[1:] if argv is None else argv))
+    args.phase = "check"
+    start = time.perf_counter()
+    try:
+        with warnings.catch_warnings():  # a warning is one line on stderr, whatever the interpreter's filters
+            warnings.simplefilter("default", UserWarning)
+            warnings.showwarning = _one_line
+            args.func(args)
+    except KeyboardInterrupt:
+        print("amb-fast: interrupted", file=sys.stderr)
+        return 130
+    except Exception as error:
+        if args.debug:
+            traceback.print_exc()
+        status = 2 if args.phase == "check" else 1
+        if isinstance(error, EXPECTED):
+            text = " ".join(str(error).split()) or type(error).__name__
+            print(f"amb-fast: error: {text}", file=sys.stderr)
+        else:
+            print(f"amb-fast: error: internal error {type(error).__name__}: {error} (please report it; --debug shows "
+                  "the traceback)", file=sys.stderr)  # fmt: skip
+            status = 1
+        return status
+    print(f"done in {time.perf_counter() - start:.1f} s", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
