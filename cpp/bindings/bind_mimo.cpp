@@ -4,6 +4,10 @@
 #include <pybind11/complex.h>
 #include <pybind11/numpy.h>
 
+#include <stdexcept>
+#include <string>
+#include <vector>
+
 using namespace amb_fast;
 
 namespace {
@@ -16,6 +20,24 @@ MimoModel model_of(const Matrix& M, const Matrix& Bf, const Matrix& Bn, const Ma
     MimoModel model{M, Bf, Bn, C, Dn, transducer_pole, sensor_noise, force_noise};
     model.validate();
     return model;
+}
+
+// The experiments' period forces, (len(seeds), period, p), checked with the seeds and the periods
+// asked for; returns one pointer per experiment into the array and the period length.
+std::vector<const double*> experiment_forces(const InputArray& period_forces, Eigen::Index p,
+                                             const std::vector<std::uint64_t>& seeds, Eigen::Index periods,
+                                             Eigen::Index& L) {
+    if (period_forces.ndim() != 3 || period_forces.shape(2) != p ||
+        static_cast<std::size_t>(period_forces.shape(0)) != seeds.size())
+        throw std::invalid_argument("period_forces must have shape (len(seeds), period, " + std::to_string(p) + ")");
+    if (seeds.empty() || seeds.size() > 2)
+        throw std::invalid_argument("seeds must hold 1 or 2 seeds (experiments in lock step)");
+    if (periods < 2) throw std::invalid_argument("periods must be >= 2, got " + std::to_string(periods));
+    L = static_cast<Eigen::Index>(period_forces.shape(1));
+    std::vector<const double*> forces;
+    for (std::size_t k = 0; k < seeds.size(); ++k)
+        forces.push_back(period_forces.data() + static_cast<Eigen::Index>(k) * L * p);
+    return forces;
 }
 }  // namespace
 
@@ -51,21 +73,13 @@ void bind_mimo(py::module_& m) {
            const std::vector<std::uint64_t>& seeds, bool steady_start, bool all_forces) {
             const MimoModel model = model_of(M, Bf, Bn, C, Dn, transducer_pole, sensor_noise, force_noise);
             const auto p = model.forces(), q = model.probes();
-            if (period_forces.ndim() != 3 || period_forces.shape(2) != p ||
-                static_cast<std::size_t>(period_forces.shape(0)) != seeds.size())
-                throw std::invalid_argument("period_forces must have shape (len(seeds), period, " + std::to_string(p) +
-                                            ")");
-            const auto K = static_cast<Eigen::Index>(period_forces.shape(0));
-            const auto L = static_cast<Eigen::Index>(period_forces.shape(1));
-            if (periods < 2) throw std::invalid_argument("periods must be >= 2, got " + std::to_string(periods));
+            Eigen::Index L = 0;
+            const std::vector<const double*> forces = experiment_forces(period_forces, p, seeds, periods, L);
+            const auto K = static_cast<Eigen::Index>(forces.size());
             py::array_t<double> recorded({K, p, all_forces ? periods * L : L}), measured({K, q, periods * L});
             double *rec = recorded.mutable_data(), *mea = measured.mutable_data();
-            const double* input = period_forces.data();
-            if (K < 1 || K > 2) throw std::invalid_argument("seeds must hold 1 or 2 seeds (experiments in lock step)");
-            std::vector<const double*> forces;
             std::vector<double*> recs, meas;
             for (Eigen::Index k = 0; k < K; ++k) {
-                forces.push_back(input + k * L * p);
                 recs.push_back(rec + k * (all_forces ? periods : 1) * L * p);
                 meas.push_back(mea + k * periods * L * q);
             }
@@ -91,21 +105,12 @@ void bind_mimo(py::module_& m) {
            const std::vector<std::uint64_t>& seeds, bool steady_start, const std::vector<Eigen::Index>& bins) {
             const MimoModel model = model_of(M, Bf, Bn, C, Dn, transducer_pole, sensor_noise, force_noise);
             const auto p = model.forces(), q = model.probes();
-            if (period_forces.ndim() != 3 || period_forces.shape(2) != p ||
-                static_cast<std::size_t>(period_forces.shape(0)) != seeds.size())
-                throw std::invalid_argument("period_forces must have shape (len(seeds), period, " + std::to_string(p) +
-                                            ")");
-            if (seeds.empty() || seeds.size() > 2)
-                throw std::invalid_argument("seeds must hold 1 or 2 seeds (experiments in lock step)");
-            if (periods < 2) throw std::invalid_argument("periods must be >= 2, got " + std::to_string(periods));
-            const auto K = static_cast<Eigen::Index>(period_forces.shape(0));
-            const auto L = static_cast<Eigen::Index>(period_forces.shape(1));
+            Eigen::Index L = 0;
+            const std::vector<const double*> forces = experiment_forces(period_forces, p, seeds, periods, L);
+            const auto K = static_cast<Eigen::Index>(forces.size());
             const auto B = static_cast<Eigen::Index>(bins.size());
             py::array_t<std::complex<double>> force_lines({periods, B, p, K}), displacement_lines({periods, B, q, K});
             std::complex<double>*fl = force_lines.mutable_data(), *dl = displacement_lines.mutable_data();
-            const double* input = period_forces.data();
-            std::vector<const double*> forces;
-            for (Eigen::Index k = 0; k < K; ++k) forces.push_back(input + k * L * p);
             interruptible([&] {
                 mimo_line_experiments(model, forces.data(), L, settle_periods, periods, seeds, steady_start, bins, fl,
                                       dl);

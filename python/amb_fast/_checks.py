@@ -132,13 +132,13 @@ def warn_implausible(
     """
     stiffness = float(np.median(np.abs(k)))
     dynamic = float(np.median(np.abs(H)))
+    ratio = float(np.median(np.abs(H) / inertia)) if inertia is not None and inertia.size else np.inf
     if dynamic < 1.0:
         warnings.warn(
             f"the median |F/Y| is {dynamic:.3g} N/m: force and displacement look swapped (or not in N and m)",
             stacklevel=stacklevel,
         )
-    elif inertia is not None and inertia.size and float(np.median(np.abs(H) / inertia)) < TOO_LIGHT:
-        ratio = float(np.median(np.abs(H) / inertia))
+    elif ratio < TOO_LIGHT:
         warnings.warn(
             f"the force is {ratio:.2g} of what accelerating the given mass takes (median |F/Y| / (m w^2) over "
             "the lines): is the force in kN instead of N, or the mass not in kg?",

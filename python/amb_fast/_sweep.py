@@ -19,8 +19,9 @@ from ._excitation import Multisine
 from ._experiment import _plan, _window, automatic_settle
 from ._linear import AnyController, core_controller, is_controller, loop_poles, spectral_radius
 from ._params import PID, Rig
-from ._sweep_result import OVERFLOW, STATUS, STATUS_NAMES, SWEPT, SweepResult, _version, unit_of
+from ._sweep_result import OVERFLOW, STATUS, STATUS_NAMES, SWEPT, SweepResult, unit_of
 from ._validate import integer, require, rig_and_controller, seed_value
+from .io._results import version
 
 RIG_FIELDS = tuple(f.name for f in fields(Rig) if f.name not in ("force_law", "substeps"))
 Factory = Callable[..., tuple[Rig, AnyController]]
@@ -377,7 +378,7 @@ def sweep(
             "f0": excitation.f0,
             "fs": excitation.fs,
             "seed": base_seed,
-            "amb_fast_version": _version(),
+            "amb_fast_version": version(),
         },  # fmt: skip
         **results,
     )

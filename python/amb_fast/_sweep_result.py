@@ -12,13 +12,6 @@ import numpy as np
 
 from ._validate import require
 
-
-def _version() -> str:
-    from . import __version__
-
-    return __version__
-
-
 SWEPT = ("kp", "ki", "kd")  # the PID gains: swept together in closed form
 STATUS = ("ok", "unstable", "touchdown", "saturated")  # index = the core's PointStatus
 UNITS = {

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import TouchdownError
+from ..io._results import version
 from ..two_axis import add_two_axis_options
 from ._commands import (
     cmd_identify,
@@ -54,7 +55,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Simulate and identify a digitally controlled active magnetic bearing (paper rig by default). "
         "SI units: N, m, A, s, kg; frequencies in Hz; gains kp A/m, ki A/(m s), kd A s/m.",
     )
-    parser.add_argument("--version", action="version", version=f"amb-fast {_version()}")
+    parser.add_argument("--version", action="version", version=f"amb-fast {version()}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="{paper,run,sweep,identify,fit,design}",
                                 parser_class=_Parser)  # fmt: skip
 
@@ -131,12 +132,6 @@ def build_parser() -> argparse.ArgumentParser:
     add_fit_parser(sub, parents=[common])
     add_design_parser(sub, parents=[common])
     return parser
-
-
-def _version() -> str:
-    from .. import __version__
-
-    return __version__
 
 
 def _one_line(
