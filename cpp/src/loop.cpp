@@ -104,9 +104,12 @@ void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const d
 template <int N, int sensed, bool has_amp, bool checked, bool fractional>
 void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise) {
     using namespace state;
-    const CascadeMap& map = *map_;
-    const ControlLaw<N>& law = controller_.law<N>();
-    double* s = controller_.state();
+    // Local copies: the coefficients and the controller state stay in registers instead of being
+    // reloaded after every store to the output arrays (which the compiler must assume may alias them).
+    const CascadeMap map = *map_;
+    const ControlLaw<N> law = controller_.law<N>();
+    std::array<double, N> s;
+    std::copy_n(controller_.state(), N, s.begin());
     double xy = x_[y], xv = x_[v], xi = x_[i], xf = x_[i_f], xs = x_[ys];
     double u_prev = u_prev_;
     const double limit = limit_, touchdown = touchdown_;
@@ -114,7 +117,7 @@ void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const d
     Eigen::Index saturated = 0;
     for (Eigen::Index j = 0; j < n; ++j) {
         const double e = (sensed == ys ? xs : xy) + noise[j];
-        const double wanted = controller_.delayed(law(e, s));
+        const double wanted = controller_.delayed(law(e, s.data()));
         // The amplifier's limit (with none, clamping to +-Inf would change nothing, not even a bit).
         const double u = checked ? std::clamp(wanted, -limit, limit) : wanted;
         if constexpr (checked) saturated += u != wanted;
@@ -130,6 +133,7 @@ void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const d
             if (has_clearance && std::abs(xy) >= touchdown)
                 throw Touchdown((k_ + j + 1) * T_, xy, static_cast<long>(k_ + j + 1));
     }
+    std::copy_n(s.begin(), N, controller_.state());
     saturated_ += saturated;
     u_prev_ = u_prev;
     x_ << xy, xv, xi, xf, xs;

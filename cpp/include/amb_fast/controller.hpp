@@ -9,9 +9,12 @@
 #include <type_traits>
 #include <vector>
 
+#include "amb_fast/inline.hpp"
+
 namespace amb_fast {
 
 constexpr int max_controller_order = 24;
+
 
 // s[k+1] = A s[k] + B e[k],  u[k] = C s[k] + D e[k],  applied `delay` samples later.
 struct Controller {
@@ -71,7 +74,7 @@ struct ControlLaw {
     // only one product and one sum stand between the measurement and the command. Every loop (single
     // runs and each lane of a sweep) performs these operations in this order, so all agree bit for bit.
     // Each state's new value is ((A(i,0) s0 + A(i,1) s1) + ...) + B(i) e, summed in that order.
-    double operator()(double e, double* s) const {
+    AMB_FAST_ALWAYS_INLINE double operator()(double e, double* s) const {
         double cs = C[0] * s[0];
         for (int j = 1; j < N; ++j) cs += C[j] * s[j];
         std::array<double, N> next;

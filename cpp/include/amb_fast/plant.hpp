@@ -5,6 +5,8 @@
 #include <optional>
 #include <string>
 
+#include "amb_fast/inline.hpp"
+
 namespace amb_fast {
 
 enum class ForceLaw { linear, nonlinear };
@@ -116,7 +118,7 @@ SampleMap sample_map(const Rig& rig, double T);
 struct CascadeMap {
     explicit CascadeMap(const SampleMap& map);  // throws std::logic_error if the map lost the structure
 
-    void advance(double& xy, double& xv, double& xi, double& xf, double& xs, double f, double u) const {
+    AMB_FAST_ALWAYS_INLINE void advance(double& xy, double& xv, double& xi, double& xf, double& xs, double f, double u) const {
 #if AMB_FAST_PAIRED_MAP
         // y and v rows side by side: each lane does the scalar rows' operations in their order.
         const Pair n = ((pair_y * xy + pair_v * xv) + (pair_i * xi + pair_f * xf)) + (pair_force * f + pair_u * u);
@@ -133,7 +135,7 @@ struct CascadeMap {
         xs = ns;
     }
     // The same with the previous command u_prev felt over the dead time's fraction of the sample.
-    void advance(double& xy, double& xv, double& xi, double& xf, double& xs, double f, double u, double u_prev) const {
+    AMB_FAST_ALWAYS_INLINE void advance(double& xy, double& xv, double& xi, double& xf, double& xs, double f, double u, double u_prev) const {
         const double ny = ((yy * xy + yv * xv) + (yi * xi + yf * xf) + (y_f * f + y_u * u)) + y_p * u_prev;
         const double nv = ((vy * xy + vv * xv) + (vi * xi + vf * xf) + (v_f * f + v_u * u)) + v_p * u_prev;
         const double ns = (((sy * xy + sv * xv) + (si * xi + sf * xf)) + (ss * xs + (s_f * f + s_u * u))) + s_p * u_prev;
