@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
+import warnings
 from dataclasses import replace
 
 import numpy as np
@@ -146,3 +147,59 @@ def test_progress_bar_when_asked_and_quiet_otherwise(setup, capsys) -> None:
     assert "2/2" in capsys.readouterr().err
     af.sweep(rig, pid, excitation, kp=[2000.0, 2200.0], periods=2, progress=False)
     assert capsys.readouterr().err == ""
+
+
+LANE_CASES = {
+    # Every shape of the linear kernel that sweeps run in SIMD lanes: a dead time with a whole sample
+    # and a fraction, a computation delay, a current limit that clips some points, no lags at all
+    # (the sensor reads y itself; the command is the current), a 6-state controller.
+    "dead time and delay": (dict(dead_time=1.5 / 4000), dict(delay=1)),
+    "current limit": (dict(current_limit=0.108), {}),
+    "no lags": (dict(amp_bandwidth=None, eddy_bandwidth=None, sensor_bandwidth=None), {}),
+}
+
+
+@pytest.mark.parametrize("case", [*LANE_CASES, "6-state controller"])
+def test_points_run_side_by_side_equal_single_runs_bit_for_bit(setup, case) -> None:
+    rig, pid, excitation = setup
+    if case == "6-state controller":
+        controller = pid.to_controller() * af.notch(700.0) * af.low_pass(1500.0, order=2)
+        kp = np.linspace(1800.0, 2600.0, 7)  # 7 points: lanes of two and one left over
+        result = af.sweep(rig, controller, excitation, kp=kp, seed=3, periods=3, progress=False)
+        singles = [controller.with_params(kp=k) for k in kp]
+    else:
+        rig_changes, pid_changes = LANE_CASES[case]
+        rig, pid = replace(rig, **rig_changes), replace(pid, **pid_changes)
+        kp = np.linspace(1800.0, 2600.0, 7)
+        result = af.sweep(rig, pid, excitation, kp=kp, seed=3, periods=3, progress=False)
+        singles = [replace(pid, kp=k) for k in kp]
+    if case == "current limit":  # the limit (peak command ~0.11 A) clips some points only
+        assert "saturated" in list(result.status) and "ok" in list(result.status)
+    else:
+        assert list(result.status) == ["ok"] * len(kp)
+    for i, point in enumerate(singles):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            single = af.run_experiment(rig, point, excitation, periods=3, seed=int(result.seeds[i]))
+        if single.saturated_samples:
+            assert result.status[i] == "saturated"
+            continue
+        for name in ("H", "k", "c", "k_std", "c_std", "k_smooth", "c_smooth"):
+            np.testing.assert_array_equal(getattr(result, name)[i], getattr(single, name), err_msg=f"{name} at {i}")
+
+
+def test_a_linear_point_reaching_its_clearance_is_flagged_beside_the_others(setup) -> None:
+    rig, pid, excitation = setup
+    rig = replace(rig, clearance=5e-5)
+    kp = [1300.0, 2400.0, 2500.0]  # the soft point moves most
+    result = af.sweep(rig, pid, excitation, kp=kp, seed=4, periods=3, progress=False)
+    for i, k in enumerate(kp):
+        try:
+            single = af.run_experiment(rig, replace(pid, kp=k), excitation, periods=3, seed=int(result.seeds[i]))
+        except af.TouchdownError:
+            assert result.status[i] == "touchdown"
+            assert np.all(np.isnan(result.k[i]))
+            continue
+        assert result.status[i] == "ok"
+        np.testing.assert_array_equal(result.k[i], single.k)
+    assert list(result.status) == ["touchdown", "ok", "ok"]

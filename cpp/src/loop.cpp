@@ -8,6 +8,7 @@
 
 #include "amb_fast/errors.hpp"
 #include "amb_fast/interrupt.hpp"
+#include "amb_fast/lanes.hpp"
 #include "amb_fast/steady.hpp"
 
 namespace amb_fast {
@@ -67,82 +68,230 @@ void Loop::run(const double* force, Eigen::Index n, Channels out) {
     }
 }
 
-// Which state the sensor reads, where the coil current comes from, and whether a current limit or a
-// clearance is to be watched are compile-time constants in the kernel, so the state stays in
-// registers and the common case pays for no checks.
-void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise) {
-    with_capacity(controller_.capacity(), [&](auto N) { run_linear<N>(force, n, out, noise); });
-}
+namespace {
 
-template <int N>
-void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise) {
-    const bool checked = std::isfinite(limit_) || std::isfinite(touchdown_);
-    const bool ys = sensed_ == state::ys;
-    auto run = [&](auto sensed, auto has_amp, auto check) {
-        if (map_->fractional)
-            run_linear<N, decltype(sensed)::value, decltype(has_amp)::value, decltype(check)::value, true>(force, n, out, noise);
-        else
-            run_linear<N, decltype(sensed)::value, decltype(has_amp)::value, decltype(check)::value, false>(force, n, out, noise);
-    };
-    using Y = std::integral_constant<int, state::y>;
-    using YS = std::integral_constant<int, state::ys>;
-    using T = std::true_type;
-    using F = std::false_type;
-    if (checked) {
-        if (ys)
-            has_amp_ ? run(YS{}, T{}, T{}) : run(YS{}, F{}, T{});
-        else
-            has_amp_ ? run(Y{}, T{}, T{}) : run(Y{}, F{}, T{});
-    } else {
-        if (ys)
-            has_amp_ ? run(YS{}, T{}, F{}) : run(YS{}, F{}, F{});
-        else
-            has_amp_ ? run(Y{}, T{}, F{}) : run(Y{}, F{}, F{});
-    }
-}
+// The linear loop over a stretch of samples with its state in registers: T is double for one loop,
+// LaneVector for loops side by side (lanes.hpp), each lane doing exactly what a single run does.
+template <class T, int N>
+struct LinearState {
+    T y, v, i, f, s_ys, u_prev;  // plant (y, v, coil current, eddy current, sensor) and previous command
+    std::array<T, N> s;          // controller
+    std::vector<T> line;         // delay line, ring from head
+    std::size_t head = 0;
+};
 
-template <int N, int sensed, bool has_amp, bool checked, bool fractional>
-void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise) {
-    using namespace state;
-    // Local copies: the coefficients and the controller state stay in registers instead of being
-    // reloaded after every store to the output arrays (which the compiler must assume may alias them).
-    const CascadeMap map = *map_;
-    const ControlLaw<N> law = controller_.law<N>();
-    std::array<double, N> s;
-    std::copy_n(controller_.state(), N, s.begin());
-    double xy = x_[y], xv = x_[v], xi = x_[i], xf = x_[i_f], xs = x_[ys];
-    double u_prev = u_prev_;
-    const double limit = limit_, touchdown = touchdown_;
-    const bool has_clearance = std::isfinite(touchdown);  // else a diverging y (Inf) is no touchdown
-    Eigen::Index saturated = 0;
+// What a stretch of samples reports besides its outputs.
+template <class T>
+struct Watch {
+    Eigen::Index saturated = 0;  // one loop: samples clipped by the amplifier
+    T peak{};                    // lanes: max |y| seen (one loop throws Touchdown at the sample instead)
+#if AMB_FAST_LANES_OK
+    LaneMask clipped{};          // lanes: minus the samples clipped, per lane
+#endif
+};
+
+template <class T, int N, int sensed, bool has_amp, bool checked, bool fractional, class Map>
+AMB_FAST_ALWAYS_INLINE void run_samples(const Map& map, const ControlLaw<N, T>& law, LinearState<T, N>& x,
+                                        const double* force, Eigen::Index n, const T* noise, T* displacement,
+                                        T* current, double limit, Watch<T>& watch, const Loop& owner,
+                                        Eigen::Index first_sample) {
+    constexpr bool one = std::is_same_v<T, double>;
+    T xy = x.y, xv = x.v, xi = x.i, xf = x.f, xs = x.s_ys, u_prev = x.u_prev;
+    std::array<T, N> s = x.s;
+    const std::size_t d = x.line.size();
+    T* const line = x.line.data();
+    std::size_t head = x.head;
     for (Eigen::Index j = 0; j < n; ++j) {
-        const double e = (sensed == ys ? xs : xy) + noise[j];
-        const double wanted = controller_.delayed(law(e, s.data()));
+        const T e = (sensed == state::ys ? xs : xy) + noise[j];
+        T wanted = law(e, s.data());
+        if (d > 0) {  // u[k - d] out, u[k] in
+            const T held = line[head];
+            line[head] = wanted;
+            if (++head == d) head = 0;
+            wanted = held;
+        }
         // The amplifier's limit (with none, clamping to +-Inf would change nothing, not even a bit).
-        const double u = checked ? std::clamp(wanted, -limit, limit) : wanted;
-        if constexpr (checked) saturated += u != wanted;
-        out.displacement[j] = e;
-        out.current[j] = has_amp ? xi : u;
+        T u = wanted;
+        if constexpr (checked) {
+            if constexpr (one) {
+                u = std::clamp(wanted, -limit, limit);
+                watch.saturated += u != wanted;
+            } else {
+#if AMB_FAST_LANES_OK
+                u = lane_clamp(wanted, limit);
+                watch.clipped += u != wanted;
+#endif
+            }
+        }
+        displacement[j] = e;
+        current[j] = has_amp ? xi : u;
         if constexpr (fractional) {
             map.advance(xy, xv, xi, xf, xs, force[j], u, u_prev);
             u_prev = u;
-        } else {
+        } else if constexpr (one) {
             map.advance(xy, xv, xi, xf, xs, force[j], u);
+        } else {
+            map.advance_rows(xy, xv, xi, xf, xs, force[j], u);
         }
-        if constexpr (checked)
-            if (has_clearance && std::abs(xy) >= touchdown)
-                throw Touchdown((k_ + j + 1) * T_, xy, static_cast<long>(k_ + j + 1));
+        if constexpr (checked) {
+            if constexpr (one) {
+                owner.check_clearance(xy, first_sample + j + 1);
+            } else {
+#if AMB_FAST_LANES_OK
+                watch.peak = lane_max_abs(watch.peak, xy);
+#endif
+            }
+        }
     }
-    std::copy_n(s.begin(), N, controller_.state());
-    saturated_ += saturated;
-    u_prev_ = u_prev;
-    x_ << xy, xv, xi, xf, xs;
+    x.y = xy, x.v = xv, x.i = xi, x.f = xf, x.s_ys = xs, x.u_prev = u_prev;
+    x.s = s;
+    x.head = head;
+}
+
+// Calls f(sensed, has_amp, checked, fractional) with each as a compile-time constant, so the state
+// stays in registers and the common case pays for no checks.
+template <class F>
+void with_loop_shape(bool ys, bool has_amp, bool checked, bool fractional, F&& f) {
+    using Y = std::integral_constant<int, state::y>;
+    using YS = std::integral_constant<int, state::ys>;
+    using T = std::true_type;
+    using F_ = std::false_type;
+    auto last = [&](auto sensed, auto amp, auto check) {
+        fractional ? f(sensed, amp, check, T{}) : f(sensed, amp, check, F_{});
+    };
+    auto checks = [&](auto sensed, auto amp) { checked ? last(sensed, amp, T{}) : last(sensed, amp, F_{}); };
+    auto amps = [&](auto sensed) { has_amp ? checks(sensed, T{}) : checks(sensed, F_{}); };
+    ys ? amps(YS{}) : amps(Y{});
+}
+
+}  // namespace
+
+void Loop::check_clearance(double y, Eigen::Index sample) const {
+    if (std::isfinite(touchdown_) && std::abs(y) >= touchdown_)  // else a diverging y (Inf) is no touchdown
+        throw Touchdown(sample * T_, y, static_cast<long>(sample));
+}
+
+bool Loop::checked() const { return std::isfinite(limit_) || std::isfinite(touchdown_); }
+
+void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise) {
+    with_capacity(controller_.capacity(), [&](auto N) {
+        constexpr int n_ = decltype(N)::value;
+        LinearState<double, n_> x{x_[state::y], x_[state::v], x_[state::i], x_[state::i_f], x_[state::ys], u_prev_, {}, {}, 0};
+        std::copy_n(controller_.state(), n_, x.s.begin());
+        const int d = controller_.controller().delay;
+        for (int j = 0; j < d; ++j) x.line.push_back(controller_.line(j));
+        // Local copies: the coefficients stay in registers instead of being reloaded after every store
+        // to the output arrays (which the compiler must assume may alias them).
+        const CascadeMap map = *map_;
+        const ControlLaw<n_> law = controller_.law<n_>();
+        Watch<double> watch;
+        with_loop_shape(sensed_ == state::ys, has_amp_, checked(), map.fractional, [&](auto sensed, auto amp, auto check, auto frac) {
+            run_samples<double, n_, decltype(sensed)::value, decltype(amp)::value, decltype(check)::value,
+                        decltype(frac)::value>(map, law, x, force, n, noise, out.displacement, out.current, limit_,
+                                               watch, *this, k_);
+        });
+        x_ << x.y, x.v, x.i, x.f, x.s_ys;
+        u_prev_ = x.u_prev;
+        std::copy_n(x.s.begin(), n_, controller_.state());
+        for (int j = 0; j < d; ++j) controller_.set_line(j, x.line[(x.head + static_cast<std::size_t>(j)) % x.line.size()]);
+        saturated_ += watch.saturated;
+    });
     // Inf and NaN never turn finite again in a linear recursion, so one check per chunk suffices.
     if (!x_.allFinite()) {
         Eigen::Index j = 0;
         while (j < n && std::isfinite(out.displacement[j])) ++j;
         fail(k_ + j, "the displacement became non-finite: the loop is unstable");
     }
+}
+
+bool Loop::can_run_beside(const Loop& other) const {
+    return rig_.force_law == ForceLaw::linear && other.rig_.force_law == ForceLaw::linear && rig_ == other.rig_ &&
+           T_ == other.T_ && controller_.capacity() == other.controller_.capacity() &&
+           controller_.controller().delay == other.controller_.controller().delay;
+}
+
+void Loop::run_side_by_side(Loop* const* loops, int count, const double* force, Eigen::Index n, const Channels* out) {
+    bool together = count > 1 && count <= loop_lanes;
+    for (int g = 1; g < count; ++g) together = together && loops[0]->can_run_beside(*loops[g]);
+    if (!together) {
+        for (int g = 0; g < count; ++g) {
+            if (loops[g]->touched_down_) continue;  // what it would record is discarded
+            try {
+                loops[g]->run(force, n, out[g]);
+            } catch (const Touchdown&) {
+                loops[g]->touched_down_ = true;
+            }
+        }
+        return;
+    }
+#if AMB_FAST_LANES_OK
+    Loop& head = *loops[0];
+    const Rig& rig = head.rig_;
+    const CascadeMap& scalar_map = *head.map_;
+    const auto map = scalar_map.converted<LaneVector>(lane_broadcast);
+    const auto lanes = static_cast<std::size_t>(loop_lanes);
+    std::vector<LaneVector> noise(chunk), displacement(chunk), current(chunk);
+    with_capacity(head.controller_.capacity(), [&](auto N) {
+        constexpr int n_ = decltype(N)::value;
+        // Gather: lane g holds loop g (spare lanes repeat loop 0 and are never written back).
+        LinearState<LaneVector, n_> x;
+        ControlLaw<n_, LaneVector> law;
+        const int d = head.controller_.controller().delay;
+        x.line.resize(static_cast<std::size_t>(d));
+        for (std::size_t g = 0; g < lanes; ++g) {
+            const Loop& lp = *loops[g < static_cast<std::size_t>(count) ? g : 0];
+            x.y[g] = lp.x_[state::y], x.v[g] = lp.x_[state::v], x.i[g] = lp.x_[state::i];
+            x.f[g] = lp.x_[state::i_f], x.s_ys[g] = lp.x_[state::ys], x.u_prev[g] = lp.u_prev_;
+            const ControlLaw<n_>& own = lp.controller_.law<n_>();
+            for (int r = 0; r < n_; ++r) x.s[r][g] = lp.controller_.state()[r], law.B[r][g] = own.B[r], law.C[r][g] = own.C[r];
+            for (int r = 0; r < n_ * n_; ++r) law.At[r][g] = own.At[r];
+            law.D[g] = own.D;
+            for (int j = 0; j < d; ++j) x.line[static_cast<std::size_t>(j)][g] = lp.controller_.line(j);
+        }
+        std::vector<Eigen::Index> clipped(lanes, 0);
+        for (Eigen::Index start = 0; start < n; start += chunk) {
+            poll_interrupt();
+            const Eigen::Index m = std::min(chunk, n - start);
+            for (int g = 0; g < count; ++g) {
+                Loop& lp = *loops[g];
+                if (rig.sensor_noise > 0.0) lp.sensor_rng_.fill(lp.sensor_noise_.data(), m, rig.sensor_noise);
+                for (Eigen::Index j = 0; j < m; ++j) noise[static_cast<std::size_t>(j)][g] = lp.sensor_noise_[j];
+            }
+            Watch<LaneVector> watch;
+            with_loop_shape(head.sensed_ == state::ys, head.has_amp_, head.checked(), scalar_map.fractional,
+                            [&](auto sensed, auto amp, auto check, auto frac) {
+                                run_samples<LaneVector, n_, decltype(sensed)::value, decltype(amp)::value,
+                                            decltype(check)::value, decltype(frac)::value>(
+                                    map, law, x, force + start, m, noise.data(), displacement.data(), current.data(),
+                                    head.limit_, watch, head, head.k_);
+                            });
+            for (int g = 0; g < count; ++g) {
+                Loop& lp = *loops[g];
+                const Channels part{out[g].force + start, out[g].displacement + start, out[g].current + start};
+                for (Eigen::Index j = 0; j < m; ++j) {
+                    part.displacement[j] = displacement[static_cast<std::size_t>(j)][g];
+                    part.current[j] = current[static_cast<std::size_t>(j)][g];
+                }
+                lp.saturated_ -= watch.clipped[g];
+                if (std::isfinite(lp.touchdown_) && watch.peak[g] >= lp.touchdown_) lp.touched_down_ = true;
+                lp.transducer_.record(force + start, m, part.force);
+                if (rig.force_noise > 0.0) lp.force_rng_.add(part.force, m, rig.force_noise);
+                lp.k_ += m;
+            }
+        }
+        // Scatter: each loop gets its lane back.
+        for (int g = 0; g < count; ++g) {
+            Loop& lp = *loops[g];
+            lp.x_ << x.y[g], x.v[g], x.i[g], x.f[g], x.s_ys[g];
+            lp.u_prev_ = x.u_prev[g];
+            for (int r = 0; r < n_; ++r) lp.controller_.state()[r] = x.s[r][g];
+            for (int j = 0; j < d; ++j)
+                lp.controller_.set_line(j, x.line[(x.head + static_cast<std::size_t>(j)) % static_cast<std::size_t>(d)][g]);
+            if (!lp.touched_down_ && !lp.x_.allFinite())
+                lp.fail(lp.k_, "the displacement became non-finite: the loop is unstable");
+        }
+    });
+#endif
 }
 
 void Loop::run_nonlinear(const double* force, Eigen::Index n, Channels out, const double* noise) {

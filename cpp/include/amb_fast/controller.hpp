@@ -57,9 +57,11 @@ decltype(auto) with_capacity(int capacity, F&& f) {
 }
 
 // The coefficients padded to capacity N, A by columns (At[j N + i] = A(i, j)) so that the state update
-// runs down whole columns, which vectorises.
-template <int N>
+// runs down whole columns, which vectorises. T is double for one loop, or a SIMD vector of doubles
+// (lanes.hpp) holding the coefficients of several loops run side by side, one per lane.
+template <int N, class T = double>
 struct ControlLaw {
+    ControlLaw() = default;
     explicit ControlLaw(const Controller& c) {
         At.fill(0.0), B.fill(0.0), C.fill(0.0);
         const int n = c.order();
@@ -74,10 +76,10 @@ struct ControlLaw {
     // only one product and one sum stand between the measurement and the command. Every loop (single
     // runs and each lane of a sweep) performs these operations in this order, so all agree bit for bit.
     // Each state's new value is ((A(i,0) s0 + A(i,1) s1) + ...) + B(i) e, summed in that order.
-    AMB_FAST_ALWAYS_INLINE double operator()(double e, double* s) const {
-        double cs = C[0] * s[0];
+    AMB_FAST_ALWAYS_INLINE T operator()(T e, T* s) const {
+        T cs = C[0] * s[0];
         for (int j = 1; j < N; ++j) cs += C[j] * s[j];
-        std::array<double, N> next;
+        std::array<T, N> next;
         for (int i = 0; i < N; ++i) next[i] = At[i] * s[0];
         for (int j = 1; j < N; ++j)
             for (int i = 0; i < N; ++i) next[i] += At[j * N + i] * s[j];
@@ -85,9 +87,9 @@ struct ControlLaw {
         return cs + D * e;
     }
 
-    std::array<double, N * N> At;
-    std::array<double, N> B, C;
-    double D;
+    std::array<T, N * N> At;
+    std::array<T, N> B, C;
+    T D;
 };
 
 // The controller with its state and its delay line, for single runs.

@@ -88,14 +88,23 @@ public:
     // Samples at which the amplifier clipped the current command, since the start.
     Eigen::Index saturated_samples() const { return saturated_; }
 
+    // Runs count loops over the same n force samples, side by side in SIMD lanes (lanes.hpp) when they
+    // can share them (can_run_beside), else one after the other. Each loop gets exactly the numbers
+    // that its own run() would give it, except that a loop reaching its clearance does not throw: it
+    // is marked touched_down() and runs on.
+    static void run_side_by_side(Loop* const* loops, int count, const double* force, Eigen::Index n,
+                                 const Channels* out);
+    // Linear, with the same rig and a controller of the same capacity and delay.
+    bool can_run_beside(const Loop& other) const;
+    bool touched_down() const { return touched_down_; }
+    // Throws Touchdown if |y| (m) has reached the clearance at this sample.
+    void check_clearance(double y, Eigen::Index sample) const;
+
 private:
     static constexpr Eigen::Index chunk = 1024;  // noise is drawn a chunk at a time
 
     void run_linear(const double* force, Eigen::Index n, Channels out, const double* noise);
-    template <int N>
-    void run_linear(const double* force, Eigen::Index n, Channels out, const double* noise);
-    template <int N, int sensed, bool has_amp, bool checked, bool fractional>
-    void run_linear(const double* force, Eigen::Index n, Channels out, const double* noise);
+    bool checked() const;  // a current limit or a clearance to watch
     void run_nonlinear(const double* force, Eigen::Index n, Channels out, const double* noise);
     // Integrator steps over one stretch of a sample with constant inputs (steps of h).
     struct Stretch {
@@ -122,6 +131,7 @@ private:
     double limit_;      // amplifier limit on |i_cmd| (A), may be infinite
     double touchdown_;  // |y| of touchdown (m), may be infinite
     Eigen::Index saturated_ = 0;
+    bool touched_down_ = false;
     // One stream per noise source, so the draws do not depend on how a run is cut into chunks.
     std::uint64_t seed_;
     NormalStream sensor_rng_, force_rng_;

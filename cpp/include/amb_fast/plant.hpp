@@ -115,19 +115,16 @@ SampleMap sample_map(const Rig& rig, double T);
 #define AMB_FAST_PAIRED_MAP 0
 #endif
 
-struct CascadeMap {
-    explicit CascadeMap(const SampleMap& map);  // throws std::logic_error if the map lost the structure
-
-    AMB_FAST_ALWAYS_INLINE void advance(double& xy, double& xv, double& xi, double& xf, double& xs, double f, double u) const {
-#if AMB_FAST_PAIRED_MAP
-        // y and v rows side by side: each lane does the scalar rows' operations in their order.
-        const Pair n = ((pair_y * xy + pair_v * xv) + (pair_i * xi + pair_f * xf)) + (pair_force * f + pair_u * u);
-        const double ny = n[0], nv = n[1];
-#else
-        const double ny = (yy * xy + yv * xv) + (yi * xi + yf * xf) + (y_f * f + y_u * u);
-        const double nv = (vy * xy + vv * xv) + (vi * xi + vf * xf) + (v_f * f + v_u * u);
-#endif
-        const double ns = ((sy * xy + sv * xv) + (si * xi + sf * xf)) + (ss * xs + (s_f * f + s_u * u));
+// The map's coefficients: doubles, or each broadcast to every SIMD lane (C = LaneVector, lanes.hpp) so
+// that loops run side by side multiply whole vectors instead of broadcasting a scalar every sample.
+template <class C>
+struct CascadeCoefficients {
+    // The rows one by one, for a double or for loops side by side in SIMD lanes.
+    template <class T>
+    AMB_FAST_ALWAYS_INLINE void advance_rows(T& xy, T& xv, T& xi, T& xf, T& xs, double f, T u) const {
+        const T ny = (yy * xy + yv * xv) + (yi * xi + yf * xf) + (y_f * f + y_u * u);
+        const T nv = (vy * xy + vv * xv) + (vi * xi + vf * xf) + (v_f * f + v_u * u);
+        const T ns = ((sy * xy + sv * xv) + (si * xi + sf * xf)) + (ss * xs + (s_f * f + s_u * u));
         xf = (fi * xi + ff * xf) + f_u * u;
         xi = ii * xi + i_u * u;
         xy = ny;
@@ -135,21 +132,53 @@ struct CascadeMap {
         xs = ns;
     }
     // The same with the previous command u_prev felt over the dead time's fraction of the sample.
-    AMB_FAST_ALWAYS_INLINE void advance(double& xy, double& xv, double& xi, double& xf, double& xs, double f, double u, double u_prev) const {
-        const double ny = ((yy * xy + yv * xv) + (yi * xi + yf * xf) + (y_f * f + y_u * u)) + y_p * u_prev;
-        const double nv = ((vy * xy + vv * xv) + (vi * xi + vf * xf) + (v_f * f + v_u * u)) + v_p * u_prev;
-        const double ns = (((sy * xy + sv * xv) + (si * xi + sf * xf)) + (ss * xs + (s_f * f + s_u * u))) + s_p * u_prev;
+    template <class T>
+    AMB_FAST_ALWAYS_INLINE void advance(T& xy, T& xv, T& xi, T& xf, T& xs, double f, T u, T u_prev) const {
+        const T ny = ((yy * xy + yv * xv) + (yi * xi + yf * xf) + (y_f * f + y_u * u)) + y_p * u_prev;
+        const T nv = ((vy * xy + vv * xv) + (vi * xi + vf * xf) + (v_f * f + v_u * u)) + v_p * u_prev;
+        const T ns = (((sy * xy + sv * xv) + (si * xi + sf * xf)) + (ss * xs + (s_f * f + s_u * u))) + s_p * u_prev;
         xf = ((fi * xi + ff * xf) + f_u * u) + f_p * u_prev;
         xi = (ii * xi + i_u * u) + i_p * u_prev;
         xy = ny;
         xv = nv;
         xs = ns;
     }
+    // The coefficients converted one by one by `convert` (a broadcast to lanes).
+    template <class D, class F>
+    CascadeCoefficients<D> converted(F&& convert) const {
+        return {convert(yy),  convert(yv),  convert(yi),  convert(yf),  convert(vy),  convert(vv),  convert(vi),
+                convert(vf),  convert(ii),  convert(fi),  convert(ff),  convert(sy),  convert(sv),  convert(si),
+                convert(sf),  convert(ss),  convert(y_f), convert(v_f), convert(s_f), convert(y_u), convert(v_u),
+                convert(i_u), convert(f_u), convert(s_u), convert(y_p), convert(v_p), convert(i_p), convert(f_p),
+                convert(s_p)};
+    }
 
-    double yy, yv, yi, yf, vy, vv, vi, vf, ii, fi, ff, sy, sv, si, sf, ss;  // Phi
-    double y_f, v_f, s_f, y_u, v_u, i_u, f_u, s_u;                         // Gf, G0: force, command
-    double y_p, v_p, i_p, f_p, s_p;                                        // G1: previous command
-    bool fractional;                                                       // G1 != 0
+    C yy, yv, yi, yf, vy, vv, vi, vf, ii, fi, ff, sy, sv, si, sf, ss;  // Phi
+    C y_f, v_f, s_f, y_u, v_u, i_u, f_u, s_u;                         // Gf, G0: force, command
+    C y_p, v_p, i_p, f_p, s_p;                                        // G1: previous command
+};
+
+struct CascadeMap : CascadeCoefficients<double> {
+    explicit CascadeMap(const SampleMap& map);  // throws std::logic_error if the map lost the structure
+
+    using CascadeCoefficients<double>::advance;
+    AMB_FAST_ALWAYS_INLINE void advance(double& xy, double& xv, double& xi, double& xf, double& xs, double f, double u) const {
+#if AMB_FAST_PAIRED_MAP
+        // y and v rows side by side: each lane does the scalar rows' operations in their order.
+        const Pair n = ((pair_y * xy + pair_v * xv) + (pair_i * xi + pair_f * xf)) + (pair_force * f + pair_u * u);
+        const double ny = n[0], nv = n[1];
+        const double ns = ((sy * xy + sv * xv) + (si * xi + sf * xf)) + (ss * xs + (s_f * f + s_u * u));
+        xf = (fi * xi + ff * xf) + f_u * u;
+        xi = ii * xi + i_u * u;
+        xy = ny;
+        xv = nv;
+        xs = ns;
+#else
+        advance_rows(xy, xv, xi, xf, xs, f, u);
+#endif
+    }
+
+    bool fractional;  // G1 != 0
 #if AMB_FAST_PAIRED_MAP
     using Pair = double __attribute__((vector_size(16)));
     Pair pair_y, pair_v, pair_i, pair_f, pair_force, pair_u;  // the y and v rows' coefficients, paired

@@ -26,6 +26,8 @@
 #include <cstdint>
 #include <cstring>
 
+#include "amb_fast/inline.hpp"
+
 namespace amb_fast {
 
 namespace random_detail {
@@ -111,7 +113,7 @@ public:
         }
     }
 
-    std::uint64_t operator()() {
+    AMB_FAST_ALWAYS_INLINE std::uint64_t operator()() {
         const std::uint64_t result = rotl(s_[0] + s_[3], 23) + s_[0];
         const std::uint64_t t = s_[1] << 17;
         s_[2] ^= s_[0];
@@ -138,7 +140,7 @@ public:
     explicit NormalStream(std::uint64_t seed) : rng_(seed), zig_(&random_detail::Ziggurat::tables()) {}
 
     // One standard normal deviate.
-    double operator()() {
+    AMB_FAST_ALWAYS_INLINE double operator()() {
         const std::uint64_t bits = rng_();
         const auto layer = static_cast<std::size_t>(bits & 0xff);
         const std::uint64_t abscissa = bits >> 12;  // 52 bits, disjoint from the layer's 8 and the sign bit
