@@ -42,7 +42,7 @@ bool same_group(const SweepPoint& a, const SweepPoint& b) {
            a.controller.delay == b.controller.delay && a.controller.fs == b.controller.fs;
 }
 
-// Up to loop_lanes points of one group, each a Loop of its own as run_experiment makes it, advanced
+// Up to lanes_available() points of one group, each a Loop of its own as run_experiment makes it, advanced
 // side by side in SIMD lanes (Loop::run_side_by_side), so each gets run_experiment's numbers.
 void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* points, Eigen::Index count,
                       Eigen::Index periods, const LinePlan& plan, int median_window, bool steady_start,
@@ -105,7 +105,8 @@ void run_points(const Eigen::VectorXd& period_force, const SweepPoint* points, E
             continue;
         }
         Eigen::Index lanes = 1;
-        while (lanes < loop_lanes && start + lanes < count && same_group(head, points[start + lanes])) ++lanes;
+        const Eigen::Index most = lanes_available();
+        while (lanes < most && start + lanes < count && same_group(head, points[start + lanes])) ++lanes;
         run_linear_group(period_force, points + start, lanes, periods, plan, median_window, steady_start, out,
                          first_row + start);
         start += lanes;

@@ -72,22 +72,21 @@ namespace {
 
 // The linear loop over a stretch of samples with its state in registers: T is double for one loop,
 // LaneVector for loops side by side (lanes.hpp), each lane doing exactly what a single run does.
+// (Lane vectors first in these structs, so that they sit at multiples of their size: lanes.hpp.)
 template <class T, int N>
 struct LinearState {
     T y, v, i, f, s_ys, u_prev;  // plant (y, v, coil current, eddy current, sensor) and previous command
     std::array<T, N> s;          // controller
-    std::vector<T> line;         // delay line, ring from head
+    LaneArray<T> line;           // delay line, ring from head
     std::size_t head = 0;
 };
 
 // What a stretch of samples reports besides its outputs.
 template <class T>
 struct Watch {
-    Eigen::Index saturated = 0;  // one loop: samples clipped by the amplifier
-    T peak{};                    // lanes: max |y| seen (one loop throws Touchdown at the sample instead)
-#if AMB_FAST_LANES_OK
-    LaneMask clipped{};          // lanes: minus the samples clipped, per lane
-#endif
+    T peak{};                       // lanes: max |y| seen (one loop throws Touchdown at the sample instead)
+    decltype(T{} < T{}) clipped{};  // lanes: minus the samples clipped, per lane (-1 where a comparison holds)
+    Eigen::Index saturated = 0;     // one loop: samples clipped by the amplifier
 };
 
 template <class T, int N, int sensed, bool has_amp, bool checked, bool fractional, class Map>
@@ -148,6 +147,34 @@ AMB_FAST_ALWAYS_INLINE void run_samples(const Map& map, const ControlLaw<N, T>& 
     x.head = head;
 }
 
+#if AMB_FAST_LANES_OK
+// The lanes' kernel: two lanes in the portable build's registers, four in AVX2's where the processor
+// has it (the same source compiled for AVX2, so the same IEEE operations in the same order).
+template <int K, int N, int sensed, bool has_amp, bool checked, bool fractional>
+struct LaneKernel {
+    using V = Lanes<K>;
+    static void run(const CascadeCoefficients<V>& map, const ControlLaw<N, V>& law, LinearState<V, N>& x,
+                    const double* force, Eigen::Index n, const V* noise, V* displacement, V* current, double limit,
+                    Watch<V>& watch, const Loop& owner) {
+        run_samples<V, N, sensed, has_amp, checked, fractional>(map, law, x, force, n, noise, displacement, current,
+                                                                limit, watch, owner, 0);
+    }
+};
+#if AMB_FAST_WIDE_LANES
+template <int N, int sensed, bool has_amp, bool checked, bool fractional>
+struct LaneKernel<wide_lanes, N, sensed, has_amp, checked, fractional> {
+    using V = Lanes<wide_lanes>;
+    __attribute__((target("avx2"))) static void run(const CascadeCoefficients<V>& map, const ControlLaw<N, V>& law,
+                                                    LinearState<V, N>& x, const double* force, Eigen::Index n,
+                                                    const V* noise, V* displacement, V* current, double limit,
+                                                    Watch<V>& watch, const Loop& owner) {
+        run_samples<V, N, sensed, has_amp, checked, fractional>(map, law, x, force, n, noise, displacement, current,
+                                                                limit, watch, owner, 0);
+    }
+};
+#endif
+#endif
+
 // Calls f(sensed, has_amp, checked, fractional) with each as a compile-time constant, so the state
 // stays in registers and the common case pays for no checks.
 template <class F>
@@ -179,7 +206,8 @@ void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const d
         LinearState<double, n_> x{x_[state::y], x_[state::v], x_[state::i], x_[state::i_f], x_[state::ys], u_prev_, {}, {}, 0};
         std::copy_n(controller_.state(), n_, x.s.begin());
         const int d = controller_.controller().delay;
-        for (int j = 0; j < d; ++j) x.line.push_back(controller_.line(j));
+        x.line.resize(static_cast<std::size_t>(d));
+        for (int j = 0; j < d; ++j) x.line[static_cast<std::size_t>(j)] = controller_.line(j);
         // Local copies: the coefficients stay in registers instead of being reloaded after every store
         // to the output arrays (which the compiler must assume may alias them).
         const CascadeMap map = *map_;
@@ -211,7 +239,8 @@ bool Loop::can_run_beside(const Loop& other) const {
 }
 
 void Loop::run_side_by_side(Loop* const* loops, int count, const double* force, Eigen::Index n, const Channels* out) {
-    bool together = count > 1 && count <= loop_lanes;
+    const int lanes = count > loop_lanes ? lanes_available() : loop_lanes;
+    bool together = count > 1 && count <= lanes;
     for (int g = 1; g < count; ++g) together = together && loops[0]->can_run_beside(*loops[g]);
     if (!together) {
         for (int g = 0; g < count; ++g) {
@@ -225,17 +254,28 @@ void Loop::run_side_by_side(Loop* const* loops, int count, const double* force, 
         return;
     }
 #if AMB_FAST_LANES_OK
+    if (lanes == wide_lanes)
+        run_lanes<wide_lanes>(loops, count, force, n, out);
+    else
+        run_lanes<loop_lanes>(loops, count, force, n, out);
+#endif
+}
+
+#if AMB_FAST_LANES_OK
+template <int K>
+void Loop::run_lanes(Loop* const* loops, int count, const double* force, Eigen::Index n, const Channels* out) {
+    using V = Lanes<K>;
     Loop& head = *loops[0];
     const Rig& rig = head.rig_;
     const CascadeMap& scalar_map = *head.map_;
-    const auto map = scalar_map.converted<LaneVector>(lane_broadcast);
-    const auto lanes = static_cast<std::size_t>(loop_lanes);
-    std::vector<LaneVector> noise(chunk), displacement(chunk), current(chunk);
+    alignas(sizeof(V)) const auto map = scalar_map.broadcast<V>([](V& lanes, double value) { lane_fill(lanes, value); });
+    const auto lanes = static_cast<std::size_t>(K);
+    LaneArray<V> noise(chunk), displacement(chunk), current(chunk);
     with_capacity(head.controller_.capacity(), [&](auto N) {
         constexpr int n_ = decltype(N)::value;
         // Gather: lane g holds loop g (spare lanes repeat loop 0 and are never written back).
-        LinearState<LaneVector, n_> x;
-        ControlLaw<n_, LaneVector> law;
+        alignas(sizeof(V)) LinearState<V, n_> x;
+        alignas(sizeof(V)) ControlLaw<n_, V> law;
         const int d = head.controller_.controller().delay;
         x.line.resize(static_cast<std::size_t>(d));
         for (std::size_t g = 0; g < lanes; ++g) {
@@ -248,7 +288,6 @@ void Loop::run_side_by_side(Loop* const* loops, int count, const double* force, 
             law.D[g] = own.D;
             for (int j = 0; j < d; ++j) x.line[static_cast<std::size_t>(j)][g] = lp.controller_.line(j);
         }
-        std::vector<Eigen::Index> clipped(lanes, 0);
         for (Eigen::Index start = 0; start < n; start += chunk) {
             poll_interrupt();
             const Eigen::Index m = std::min(chunk, n - start);
@@ -257,13 +296,13 @@ void Loop::run_side_by_side(Loop* const* loops, int count, const double* force, 
                 if (rig.sensor_noise > 0.0) lp.sensor_rng_.fill(lp.sensor_noise_.data(), m, rig.sensor_noise);
                 for (Eigen::Index j = 0; j < m; ++j) noise[static_cast<std::size_t>(j)][g] = lp.sensor_noise_[j];
             }
-            Watch<LaneVector> watch;
+            alignas(sizeof(V)) Watch<V> watch;
             with_loop_shape(head.sensed_ == state::ys, head.has_amp_, head.checked(), scalar_map.fractional,
                             [&](auto sensed, auto amp, auto check, auto frac) {
-                                run_samples<LaneVector, n_, decltype(sensed)::value, decltype(amp)::value,
-                                            decltype(check)::value, decltype(frac)::value>(
+                                LaneKernel<K, n_, decltype(sensed)::value, decltype(amp)::value,
+                                           decltype(check)::value, decltype(frac)::value>::run(
                                     map, law, x, force + start, m, noise.data(), displacement.data(), current.data(),
-                                    head.limit_, watch, head, head.k_);
+                                    head.limit_, watch, head);
                             });
             for (int g = 0; g < count; ++g) {
                 Loop& lp = *loops[g];
@@ -291,8 +330,8 @@ void Loop::run_side_by_side(Loop* const* loops, int count, const double* force, 
                 lp.fail(lp.k_, "the displacement became non-finite: the loop is unstable");
         }
     });
-#endif
 }
+#endif
 
 void Loop::run_nonlinear(const double* force, Eigen::Index n, Channels out, const double* noise) {
     for (Eigen::Index j = 0; j < n; ++j) {

@@ -105,6 +105,9 @@ private:
 
     void run_linear(const double* force, Eigen::Index n, Channels out, const double* noise);
     bool checked() const;  // a current limit or a clearance to watch
+    // run_side_by_side's work in K lanes.
+    template <int K>
+    static void run_lanes(Loop* const* loops, int count, const double* force, Eigen::Index n, const Channels* out);
     void run_nonlinear(const double* force, Eigen::Index n, Channels out, const double* noise);
     // Integrator steps over one stretch of a sample with constant inputs (steps of h).
     struct Stretch {

@@ -143,14 +143,18 @@ struct CascadeCoefficients {
         xv = nv;
         xs = ns;
     }
-    // The coefficients converted one by one by `convert` (a broadcast to lanes).
-    template <class D, class F>
-    CascadeCoefficients<D> converted(F&& convert) const {
-        return {convert(yy),  convert(yv),  convert(yi),  convert(yf),  convert(vy),  convert(vv),  convert(vi),
-                convert(vf),  convert(ii),  convert(fi),  convert(ff),  convert(sy),  convert(sv),  convert(si),
-                convert(sf),  convert(ss),  convert(y_f), convert(v_f), convert(s_f), convert(y_u), convert(v_u),
-                convert(i_u), convert(f_u), convert(s_u), convert(y_p), convert(v_p), convert(i_p), convert(f_p),
-                convert(s_p)};
+    // Every coefficient broadcast to the lanes of D: fill(D& lanes, double value).
+    template <class D, class Fill>
+    CascadeCoefficients<D> broadcast(Fill fill) const {
+        CascadeCoefficients<D> out;
+        const double* from[] = {&yy,  &yv,  &yi,  &yf,  &vy,  &vv,  &vi,  &vf,  &ii,  &fi,  &ff,  &sy,  &sv,  &si,  &sf,
+                                &ss,  &y_f, &v_f, &s_f, &y_u, &v_u, &i_u, &f_u, &s_u, &y_p, &v_p, &i_p, &f_p, &s_p};
+        D* to[] = {&out.yy,  &out.yv,  &out.yi,  &out.yf,  &out.vy,  &out.vv,  &out.vi,  &out.vf,
+                   &out.ii,  &out.fi,  &out.ff,  &out.sy,  &out.sv,  &out.si,  &out.sf,  &out.ss,
+                   &out.y_f, &out.v_f, &out.s_f, &out.y_u, &out.v_u, &out.i_u, &out.f_u, &out.s_u,
+                   &out.y_p, &out.v_p, &out.i_p, &out.f_p, &out.s_p};
+        for (std::size_t k = 0; k < sizeof from / sizeof from[0]; ++k) fill(*to[k], *from[k]);
+        return out;
     }
 
     C yy, yv, yi, yf, vy, vv, vi, vf, ii, fi, ff, sy, sv, si, sf, ss;  // Phi
