@@ -59,10 +59,18 @@ void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* poi
     Eigen::Index last = 0;
     for (std::size_t g = 0; g < n; ++g) {
         loops.emplace_back(points[g].rig, points[g].controller, points[g].seed);
-        if (steady_start) loops.back().start_periodic(period_force.data(), L);
         estimators.emplace_back(plan);
         channels.push_back({force[g].data(), displacement[g].data(), current[g].data()});
         last = std::max(last, points[g].settle_periods + periods);
+    }
+    if (steady_start) {  // the probes side by side too (Loop::start_periodic in two steps)
+        std::vector<Loop> probes;
+        std::vector<Loop*> probing;
+        probes.reserve(n);
+        for (auto& loop : loops) probes.push_back(loop.periodic_probe());
+        for (auto& probe : probes) probing.push_back(&probe);
+        Loop::run_side_by_side(probing.data(), static_cast<int>(n), period_force.data(), L, channels.data());
+        for (std::size_t g = 0; g < n; ++g) loops[g].start_periodic_from(probes[g], L);
     }
     for (auto& loop : loops) running.push_back(&loop);
     for (Eigen::Index p = 0; p < last; ++p) {

@@ -405,7 +405,14 @@ void Loop::set_stacked_state(const Eigen::VectorXd& z) {
 }
 
 void Loop::start_periodic(const double* period_force, Eigen::Index L) {
-    // One period from rest of the noise-free linear loop without limits, by the same kernel.
+    Loop probe = periodic_probe();
+    Eigen::VectorXd f(L), y(L), i(L);
+    probe.run(period_force, L, {f.data(), y.data(), i.data()});
+    start_periodic_from(probe, L);
+}
+
+Loop Loop::periodic_probe() const {
+    // The noise-free linear loop without limits, run by the same kernel.
     Rig quiet = rig_;
     quiet.force_law = ForceLaw::linear;
     quiet.sensor_noise = quiet.force_noise = 0.0;
@@ -413,10 +420,11 @@ void Loop::start_periodic(const double* period_force, Eigen::Index L) {
     quiet.current_limit.reset();
     Controller own = controller_.controller();  // the dead time's whole samples are in its delay already
     own.delay -= split_dead_time(rig_.dead_time, T_).samples;
-    Loop probe(quiet, own);
-    Eigen::VectorXd f(L), y(L), i(L);
-    probe.run(period_force, L, {f.data(), y.data(), i.data()});
-    const ClosedLoopMap map(plant_ ? *plant_ : sample_map(quiet, T_), sensed_, controller_.controller(), fraction_);
+    return Loop(quiet, own);
+}
+
+void Loop::start_periodic_from(const Loop& probe, Eigen::Index L) {
+    const ClosedLoopMap map(plant_ ? *plant_ : sample_map(probe.rig_, T_), sensed_, controller_.controller(), fraction_);
     Eigen::VectorXd z = periodic_start(map.M, L, probe.stacked_state());
     if (rig_.sensor_noise > 0.0) {
         NormalStream draws(start_noise_seed(seed_));
@@ -425,7 +433,7 @@ void Loop::start_periodic(const double* period_force, Eigen::Index L) {
         z += stationary_noise_root(map.M, map.noise_in, rig_.sensor_noise) * w;
     }
     set_stacked_state(z);
-    transducer_.set_state(periodic_transducer_start(transducer_.pole(), L, probe.transducer().state()));
+    transducer_.set_state(periodic_transducer_start(transducer_.pole(), L, probe.transducer_.state()));
 }
 
 void Loop::fail(Eigen::Index sample, const char* what) const {

@@ -80,6 +80,10 @@ public:
     // exact for the linear law without noise; with sensor noise, the noise-driven part of the state is
     // drawn from its stationary distribution. The non-linear law starts from the linearised steady state.
     void start_periodic(const double* period_force, Eigen::Index L);
+    // The same in two steps, so that many loops' probes can run side by side: the probe (the loop
+    // without noise or limits, from rest), then, once it has run one period, the start it gives.
+    Loop periodic_probe() const;
+    void start_periodic_from(const Loop& probe, Eigen::Index L);
     // The state as z of steady.hpp, and setting it (the delay line restarts at its head).
     Eigen::VectorXd stacked_state() const;
     void set_stacked_state(const Eigen::VectorXd& z);
