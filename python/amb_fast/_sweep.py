@@ -246,7 +246,7 @@ def sweep(
     Notes
     -----
     Points whose linearised loop is unstable are flagged and not simulated; the rest run in a batched
-    C++ core (points with the same rig and controller shape advance in lock step), ``workers`` threads
+    C++ core (points with the same rig and controller shape run side by side in SIMD lanes), ``workers`` threads
     per call, with the GIL released. Every point equals :func:`run_experiment` of that point bit for bit.
 
     The grid is cut into chunks of ``chunk_size`` points (default: equal chunks, a multiple of the

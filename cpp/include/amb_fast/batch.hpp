@@ -1,6 +1,6 @@
 // Many points (rig, controller) of one experiment at once: points whose rig is the same and whose
-// controllers share a shape advance in lock step, a structure of arrays with the points innermost,
-// split across threads. Each point gets exactly the numbers that run_experiment gives it alone.
+// controllers share a shape run side by side in SIMD lanes (Loop::run_side_by_side), split across
+// threads. Each point gets exactly the numbers that run_experiment gives it alone.
 #pragma once
 
 #include <Eigen/Dense>
