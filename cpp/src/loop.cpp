@@ -57,13 +57,17 @@ void Loop::run(const double* force, Eigen::Index n, Channels out) {
         const Channels part{out.force + start, out.displacement + start, out.current + start};
         if (rig_.sensor_noise > 0.0) sensor_rng_.fill(sensor_noise_.data(), m, rig_.sensor_noise);
         const double* noise = sensor_noise_.data();
-        if (rig_.force_law == ForceLaw::nonlinear)
+        if (rig_.force_law == ForceLaw::nonlinear) {
             run_nonlinear(force + start, m, part, noise);
-        else
-            run_linear(force + start, m, part, noise);
-        transducer_.record(force + start, m, part.force);
-        if (rig_.force_noise > 0.0)
-            force_rng_.add(part.force, m, rig_.force_noise);
+            transducer_.record(force + start, m, part.force);
+            if (rig_.force_noise > 0.0) force_rng_.add(part.force, m, rig_.force_noise);
+        } else {  // the force noise drawn inside the loop (InLoopDraws), added once the transducer has run
+            double* force_noise = rig_.force_noise > 0.0 ? force_noise_.data() : nullptr;
+            run_linear(force + start, m, part, noise, force_noise);
+            transducer_.record(force + start, m, part.force);
+            if (force_noise)
+                for (Eigen::Index j = 0; j < m; ++j) part.force[j] += force_noise[j];
+        }
         k_ += m;
     }
 }
@@ -89,11 +93,20 @@ struct Watch {
     Eigen::Index saturated = 0;     // one loop: samples clipped by the amplifier
 };
 
-template <class T, int N, int sensed, bool has_amp, bool checked, bool fractional, class Map>
+// Deviates of a noise source drawn inside the loop, one per sample (out[j] = sigma z[j]): the loop is
+// bound by the latency of its sample-to-sample chain, and the generator's independent work fills the
+// idle issue slots, where drawing them in a pass of their own would cost ~2 ns each.
+struct InLoopDraws {
+    NormalStream::Local* stream = nullptr;  // none: nothing drawn
+    double sigma = 0.0;
+    double* out = nullptr;
+};
+
+template <class T, int N, int sensed, bool has_amp, bool checked, bool fractional, class Map, bool draw = false>
 AMB_FAST_ALWAYS_INLINE void run_samples(const Map& map, const ControlLaw<N, T>& law, LinearState<T, N>& x,
                                         const double* force, Eigen::Index n, const T* noise, T* displacement,
                                         T* current, double limit, Watch<T>& watch, const Loop& owner,
-                                        Eigen::Index first_sample) {
+                                        Eigen::Index first_sample, InLoopDraws draws = {}) {
     constexpr bool one = std::is_same_v<T, double>;
     T xy = x.y, xv = x.v, xi = x.i, xf = x.f, xs = x.s_ys, u_prev = x.u_prev;
     std::array<T, N> s = x.s;
@@ -101,6 +114,7 @@ AMB_FAST_ALWAYS_INLINE void run_samples(const Map& map, const ControlLaw<N, T>& 
     T* const line = x.line.data();
     std::size_t head = x.head;
     for (Eigen::Index j = 0; j < n; ++j) {
+        if constexpr (draw) draws.out[j] = draws.sigma * (*draws.stream)();
         const T e = (sensed == state::ys ? xs : xy) + noise[j];
         T wanted = law(e, s.data());
         if (d > 0) {  // u[k - d] out, u[k] in
@@ -200,7 +214,7 @@ void Loop::check_clearance(double y, Eigen::Index sample) const {
 
 bool Loop::checked() const { return std::isfinite(limit_) || std::isfinite(touchdown_); }
 
-void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise) {
+void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise, double* force_noise) {
     with_capacity(controller_.capacity(), [&](auto N) {
         constexpr int n_ = decltype(N)::value;
         LinearState<double, n_> x{x_[state::y], x_[state::v], x_[state::i], x_[state::i_f], x_[state::ys], u_prev_, {}, {}, 0};
@@ -213,11 +227,23 @@ void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const d
         const CascadeMap map = *map_;
         const ControlLaw<n_> law = controller_.law<n_>();
         Watch<double> watch;
+        std::optional<NormalStream::Local> local;
+        InLoopDraws draws;
+        if (force_noise) {
+            local.emplace(force_rng_);
+            draws = {&*local, rig_.force_noise, force_noise};
+        }
         with_loop_shape(sensed_ == state::ys, has_amp_, checked(), map.fractional, [&](auto sensed, auto amp, auto check, auto frac) {
-            run_samples<double, n_, decltype(sensed)::value, decltype(amp)::value, decltype(check)::value,
-                        decltype(frac)::value>(map, law, x, force, n, noise, out.displacement, out.current, limit_,
-                                               watch, *this, k_);
+            constexpr int sensed_ = decltype(sensed)::value;
+            constexpr bool amp_ = decltype(amp)::value, check_ = decltype(check)::value, frac_ = decltype(frac)::value;
+            if (local)
+                run_samples<double, n_, sensed_, amp_, check_, frac_, CascadeMap, true>(
+                    map, law, x, force, n, noise, out.displacement, out.current, limit_, watch, *this, k_, draws);
+            else
+                run_samples<double, n_, sensed_, amp_, check_, frac_>(map, law, x, force, n, noise, out.displacement,
+                                                                      out.current, limit_, watch, *this, k_);
         });
+        if (local) local->commit();
         x_ << x.y, x.v, x.i, x.f, x.s_ys;
         u_prev_ = x.u_prev;
         std::copy_n(x.s.begin(), n_, controller_.state());

@@ -107,7 +107,8 @@ public:
 private:
     static constexpr Eigen::Index chunk = 1024;  // noise is drawn a chunk at a time
 
-    void run_linear(const double* force, Eigen::Index n, Channels out, const double* noise);
+    // force_noise: where the loop draws the force transducer's noise of these samples, or null.
+    void run_linear(const double* force, Eigen::Index n, Channels out, const double* noise, double* force_noise);
     bool checked() const;  // a current limit or a clearance to watch
     // run_side_by_side's work in K lanes.
     template <int K>
@@ -142,7 +143,7 @@ private:
     // One stream per noise source, so the draws do not depend on how a run is cut into chunks.
     std::uint64_t seed_;
     NormalStream sensor_rng_, force_rng_;
-    Eigen::VectorXd sensor_noise_ = Eigen::VectorXd::Zero(chunk);
+    Eigen::VectorXd sensor_noise_ = Eigen::VectorXd::Zero(chunk), force_noise_ = Eigen::VectorXd::Zero(chunk);
     ForceTransducer transducer_;
 };
 

@@ -149,6 +149,30 @@ public:
         return rare(bits);
     }
 
+    // The stream drawn through a copy of its generator that a hot loop keeps in registers: the same
+    // deviates in the same order (the rare path goes through the stream itself); commit() hands the
+    // generator back, after which the stream continues where the copy stopped.
+    class Local {
+    public:
+        explicit Local(NormalStream& stream) : stream_(&stream), rng_(stream.rng_), zig_(stream.zig_) {}
+        AMB_FAST_ALWAYS_INLINE double operator()() {
+            const std::uint64_t bits = rng_();
+            const auto layer = static_cast<std::size_t>(bits & 0xff);
+            const std::uint64_t abscissa = bits >> 12;
+            if (abscissa < zig_->k[layer]) return signed_by(NormalStream::abscissa_value(*zig_, abscissa, layer), bits);
+            stream_->rng_ = rng_;
+            const double z = stream_->rare(bits);
+            rng_ = stream_->rng_;
+            return z;
+        }
+        void commit() { stream_->rng_ = rng_; }
+
+    private:
+        NormalStream* stream_;
+        Xoshiro256pp rng_;
+        const random_detail::Ziggurat* zig_;
+    };
+
     // out[j * stride] = sigma * (next deviate), j < n.
     void fill(double* out, Eigen::Index n, double sigma, Eigen::Index stride = 1) {
         for (Eigen::Index j = 0; j < n; ++j) out[j * stride] = sigma * (*this)();
@@ -167,9 +191,10 @@ private:
         std::memcpy(&x, &u, sizeof u);
         return x;
     }
-    double abscissa_value(std::uint64_t abscissa, std::size_t layer) const {
-        return static_cast<double>(static_cast<std::int64_t>(abscissa)) * zig_->w[layer];  // exact below 2^52
+    static double abscissa_value(const random_detail::Ziggurat& z, std::uint64_t abscissa, std::size_t layer) {
+        return static_cast<double>(static_cast<std::int64_t>(abscissa)) * z.w[layer];  // exact below 2^52
     }
+    double abscissa_value(std::uint64_t abscissa, std::size_t layer) const { return abscissa_value(*zig_, abscissa, layer); }
 
     // Outside the rectangles (1.5 % of draws): the wedge test or the tail, else a fresh draw.
     double rare(std::uint64_t bits) {
