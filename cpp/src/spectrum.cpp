@@ -161,11 +161,17 @@ std::vector<Eigen::Index> excited_then_unexcited(const LinePlan& plan) {
 
 PeriodEstimator::PeriodEstimator(LinePlan plan)
     : plan_(validated(plan)), bins_(excited_then_unexcited(plan_)), transform_(plan_.period, bins_) {
+    restart();
+}
+
+void PeriodEstimator::restart() {
     const Eigen::Index L = plan_.period, n = static_cast<Eigen::Index>(plan_.excited.size());
     const auto all = static_cast<Eigen::Index>(bins_.size());
+    periods_ = in_block_ = blocks_ = block_first_ = 0;
+    have_previous_ = false;
     sum_F_.setZero(all);
     sum_Y_.setZero(all);
-    for (auto* v : {&block_f_, &block_y_}) v->setZero(L);
+    for (auto* v : {&block_f_, &block_y_, &previous_f_, &previous_y_}) v->setZero(L);
     for (auto* v : {&mean_F_, &mean_Y_, &m_FYc_, &m_FF_, &m_YY_, &m_FY_}) v->setZero(n);
     m_FFc_.setZero(n);
     m_YYc_.setZero(n);
@@ -216,7 +222,7 @@ void PeriodEstimator::require_finite_block() const {
 bool PeriodEstimator::new_mean(Eigen::VectorXd& block, const Eigen::VectorXd& previous) const {
     if (plan_.periods_per_block > 1) block *= 1.0 / static_cast<double>(plan_.periods_per_block);  // the mean
     const Eigen::Index L = block.size();
-    return previous.size() != L || !std::equal(block.data(), block.data() + L, previous.data());
+    return !have_previous_ || !std::equal(block.data(), block.data() + L, previous.data());
 }
 
 void PeriodEstimator::close_block() {
@@ -236,6 +242,7 @@ void PeriodEstimator::close_block() {
         transform_(block_y_.data(), lines_y_.data());
     if (new_f) previous_f_.swap(block_f_);
     if (new_y) previous_y_.swap(block_y_);
+    have_previous_ = true;
     block_f_.setZero(L);
     block_y_.setZero(L);
     // The averaged spectra are the sum of the blocks' (the transform is linear): no extra FFT.

@@ -79,6 +79,8 @@ private:
 class PeriodEstimator {
 public:
     explicit PeriodEstimator(LinePlan plan);
+    // Forgets every period added, keeping the memory (an estimator reused for the next experiment).
+    void restart();
 
     // Adds one period of both channels (plan.period samples each); first_sample is the record index
     // of force[0]. Throws NonFiniteSamples when a block with a non-finite sample closes.
@@ -106,7 +108,8 @@ private:
     Eigen::VectorXcd sum_F_, sum_Y_;           // spectra at bins_, summed over the closed blocks' periods
     LineTransform transform_;
     Eigen::Index periods_ = 0, in_block_ = 0, blocks_ = 0, block_first_ = 0;
-    Eigen::VectorXd previous_f_, previous_y_;
+    Eigen::VectorXd previous_f_, previous_y_;  // the last block means (once have_previous_)
+    bool have_previous_ = false;
     Eigen::VectorXcd lines_f_, lines_y_;
     // Welford means and co-moments of the block spectra at the excited lines.
     Eigen::VectorXcd mean_F_, mean_Y_, m_FYc_, m_FF_, m_YY_, m_FY_;
