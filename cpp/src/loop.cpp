@@ -174,7 +174,26 @@ struct LaneKernel {
                                                                 limit, watch, owner, 0);
     }
 };
+// The noise of K points, out[j K + g] = lane g's: stream by stream, or (AVX2) four streams at once in
+// NormalLanes (1.7 against 2.2 ns per deviate; two lanes in SSE2 registers would be slower, 3.2 ns).
+template <int K>
+struct LaneDraws {
+    explicit LaneDraws(NormalStream* const* streams, int count) : streams_(streams), count_(count) {}
+    void fill(double* out, Eigen::Index n, double sigma) {
+        for (int g = 0; g < count_; ++g) streams_[g]->fill(out + g, n, sigma, K);
+    }
+    void commit() {}
+    NormalStream* const* streams_;
+    int count_;
+};
 #if AMB_FAST_WIDE_LANES
+template <>
+struct LaneDraws<wide_lanes> {
+    explicit LaneDraws(NormalStream* const* streams, int count) : lanes_(streams, count) {}
+    __attribute__((target("avx2"))) void fill(double* out, Eigen::Index n, double sigma) { lanes_.fill(out, n, sigma); }
+    void commit() { lanes_.commit(); }
+    NormalLanes<wide_lanes> lanes_;
+};
 template <int N, int sensed, bool has_amp, bool checked, bool fractional>
 struct LaneKernel<wide_lanes, N, sensed, has_amp, checked, fractional> {
     using V = Lanes<wide_lanes>;
@@ -296,7 +315,13 @@ void Loop::run_lanes(Loop* const* loops, int count, const double* force, Eigen::
     const CascadeMap& scalar_map = *head.map_;
     alignas(sizeof(V)) const auto map = scalar_map.broadcast<V>([](V& lanes, double value) { lane_fill(lanes, value); });
     const auto lanes = static_cast<std::size_t>(K);
-    LaneArray<V> noise(chunk), displacement(chunk), current(chunk);
+    LaneArray<V> noise(chunk), displacement(chunk), current(chunk), force_noise(chunk);
+    std::array<NormalStream*, K> sensor_streams{}, force_streams{};
+    for (int g = 0; g < count; ++g) {
+        sensor_streams[static_cast<std::size_t>(g)] = &loops[g]->sensor_rng_;
+        force_streams[static_cast<std::size_t>(g)] = &loops[g]->force_rng_;
+    }
+    LaneDraws<K> sensor_draws(sensor_streams.data(), count), force_draws(force_streams.data(), count);
     with_capacity(head.controller_.capacity(), [&](auto N) {
         constexpr int n_ = decltype(N)::value;
         // Gather: lane g holds loop g (spare lanes repeat loop 0 and are never written back).
@@ -317,11 +342,10 @@ void Loop::run_lanes(Loop* const* loops, int count, const double* force, Eigen::
         for (Eigen::Index start = 0; start < n; start += chunk) {
             poll_interrupt();
             const Eigen::Index m = std::min(chunk, n - start);
-            for (int g = 0; g < count; ++g) {
-                Loop& lp = *loops[g];
-                if (rig.sensor_noise > 0.0) lp.sensor_rng_.fill(lp.sensor_noise_.data(), m, rig.sensor_noise);
-                for (Eigen::Index j = 0; j < m; ++j) noise[static_cast<std::size_t>(j)][g] = lp.sensor_noise_[j];
-            }
+            if (rig.sensor_noise > 0.0)  // else the noise stays zero
+                sensor_draws.fill(reinterpret_cast<double*>(noise.data()), m, rig.sensor_noise);
+            if (rig.force_noise > 0.0)
+                force_draws.fill(reinterpret_cast<double*>(force_noise.data()), m, rig.force_noise);
             alignas(sizeof(V)) Watch<V> watch;
             with_loop_shape(head.sensed_ == state::ys, head.has_amp_, head.checked(), scalar_map.fractional,
                             [&](auto sensed, auto amp, auto check, auto frac) {
@@ -340,10 +364,13 @@ void Loop::run_lanes(Loop* const* loops, int count, const double* force, Eigen::
                 lp.saturated_ -= watch.clipped[g];
                 if (std::isfinite(lp.touchdown_) && watch.peak[g] >= lp.touchdown_) lp.touched_down_ = true;
                 lp.transducer_.record(force + start, m, part.force);
-                if (rig.force_noise > 0.0) lp.force_rng_.add(part.force, m, rig.force_noise);
+                if (rig.force_noise > 0.0)
+                    for (Eigen::Index j = 0; j < m; ++j) part.force[j] += force_noise[static_cast<std::size_t>(j)][g];
                 lp.k_ += m;
             }
         }
+        sensor_draws.commit();
+        force_draws.commit();
         // Scatter: each loop gets its lane back.
         for (int g = 0; g < count; ++g) {
             Loop& lp = *loops[g];

@@ -33,6 +33,19 @@ struct LaneType<4> {
 };
 template <int K>
 using Lanes = typename LaneType<K>::type;
+// The same lanes as 64-bit unsigned integers (random.hpp's generators side by side).
+template <int K>
+struct LaneWordType;
+template <>
+struct LaneWordType<2> {
+    typedef unsigned long long type __attribute__((vector_size(2 * sizeof(double))));
+};
+template <>
+struct LaneWordType<4> {
+    typedef unsigned long long type __attribute__((vector_size(4 * sizeof(double))));
+};
+template <int K>
+using LaneWords = typename LaneWordType<K>::type;
 using LaneVector = Lanes<2>;
 constexpr int loop_lanes = 2;
 #if defined(__x86_64__) || defined(_M_X64)

@@ -28,6 +28,7 @@
 #include <cstring>
 
 #include "amb_fast/inline.hpp"
+#include "amb_fast/lanes.hpp"
 
 namespace amb_fast {
 
@@ -128,11 +129,17 @@ public:
 
     // Uniform on [0, 1) with 53 random bits.
     double uniform() { return static_cast<double>((*this)() >> 11) * 0x1.0p-53; }
+    // The 256-bit state, word by word (for generators advanced side by side: NormalLanes).
+    const std::array<std::uint64_t, 4>& state() const { return s_; }
+    void set_state(const std::array<std::uint64_t, 4>& s) { s_ = s; }
 
 private:
     static std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
     std::array<std::uint64_t, 4> s_{};
 };
+
+template <int K>
+class NormalLanes;
 
 // One noise source: independent N(0, sigma^2) deviates, one stream per seed. The numbers depend only
 // on the seed and on how many were drawn before, never on how the draws are grouped into calls.
@@ -183,6 +190,9 @@ public:
     }
 
 private:
+    template <int K>
+    friend class NormalLanes;
+
     // The sign comes from bit 8 of the draw, set without a branch (the fast path stays branch-free).
     static double signed_by(double x, std::uint64_t bits) {
         std::uint64_t u = 0;
@@ -235,5 +245,109 @@ private:
     Xoshiro256pp rng_;
     const random_detail::Ziggurat* zig_;
 };
+
+#if AMB_FAST_LANES_OK
+// K streams drawn side by side, one per SIMD lane: lane g's deviates are exactly those that its stream's
+// operator() would give, in the same order (the generator's steps are integer operations, the fast
+// path's arithmetic the same IEEE operations; a lane outside the rectangles takes its stream's own
+// rare path). Sweeps draw their points' noise this way, four streams in one AVX2 register.
+template <int K>
+class NormalLanes {
+public:
+    using Words = LaneWords<K>;
+    using Values = Lanes<K>;
+
+    // Lane g draws from streams[g] for g < count; the lanes after it from a scratch copy (discarded).
+    NormalLanes(NormalStream* const* streams, int count) : spare_(*streams[0]) {
+        for (int g = 0; g < K; ++g) {
+            streams_[static_cast<std::size_t>(g)] = g < count ? streams[g] : &spare_;
+            const auto& state = streams_[static_cast<std::size_t>(g)]->rng_.state();
+            for (std::size_t w = 0; w < 4; ++w) words_[w][static_cast<std::size_t>(g)] = state[w];
+        }
+    }
+    // The streams continue where their lanes stopped.
+    void commit() {
+        for (std::size_t g = 0; g < K; ++g) streams_[g]->rng_.set_state(lane_state(g));
+    }
+
+    // out[j K + g] = sigma * (lane g's next deviate), j < n.
+    AMB_FAST_ALWAYS_INLINE void fill(double* out, Eigen::Index n, double sigma) {
+        const random_detail::Ziggurat& z = random_detail::Ziggurat::tables();
+        Words s0, s1, s2, s3;
+        load(s0, s1, s2, s3);
+        const Words magic = Words{} | 0x4330000000000000ULL;  // the exponent of 2^52
+        for (Eigen::Index j = 0; j < n; ++j) {
+            const Words bits = rotl(s0 + s3, 23) + s0;  // xoshiro256++, as Xoshiro256pp::operator()
+            const Words t = s1 << 17;
+            s2 ^= s0;
+            s3 ^= s1;
+            s1 ^= s2;
+            s0 ^= s3;
+            s2 ^= t;
+            s3 = rotl(s3, 45);
+            const Words abscissa = bits >> 12;
+            Words bound;
+            Values width;
+            for (int g = 0; g < K; ++g) {
+                const auto layer = static_cast<std::size_t>(bits[g] & 0xff);
+                bound[g] = z.k[layer];
+                width[g] = z.w[layer];
+            }
+            // abscissa < 2^52 as a double exactly (2^52 + a, less 2^52), times the layer's width,
+            // signed by bit 8: NormalStream's fast path.
+            const Values magnitude = (reinterpret<Values>(abscissa | magic) - 4503599627370496.0) * width;
+            Values x = reinterpret<Values>(reinterpret<Words>(magnitude) ^ ((bits & 0x100) << 55));
+            const auto inside = abscissa < bound;
+            bool all_inside = true;
+            for (int g = 0; g < K; ++g) all_inside = all_inside && inside[g];
+            if (!all_inside) {  // a lane outside the rectangles: its stream's rare path
+                store(s0, s1, s2, s3);
+                for (std::size_t g = 0; g < K; ++g) {
+                    if (inside[g]) continue;
+                    NormalStream& stream = *streams_[g];
+                    stream.rng_.set_state(lane_state(g));
+                    x[g] = stream.rare(bits[g]);
+                    const auto& state = stream.rng_.state();
+                    for (std::size_t w = 0; w < 4; ++w) words_[w][g] = state[w];
+                }
+                load(s0, s1, s2, s3);
+            }
+            const Values deviate = sigma * x;
+            std::memcpy(out + j * K, &deviate, sizeof deviate);
+        }
+        store(s0, s1, s2, s3);
+    }
+
+private:
+    static AMB_FAST_ALWAYS_INLINE Words rotl(Words x, int k) { return (x << k) | (x >> (64 - k)); }
+    template <class To, class From>
+    static AMB_FAST_ALWAYS_INLINE To reinterpret(From v) {
+        static_assert(sizeof(To) == sizeof(From));
+        To out;
+        std::memcpy(&out, &v, sizeof out);
+        return out;
+    }
+    // Through memcpy: this object may sit at an address the AVX2 kernel's aligned loads would fault on.
+    AMB_FAST_ALWAYS_INLINE void load(Words& s0, Words& s1, Words& s2, Words& s3) const {
+        std::memcpy(&s0, words_[0].data(), sizeof s0);
+        std::memcpy(&s1, words_[1].data(), sizeof s1);
+        std::memcpy(&s2, words_[2].data(), sizeof s2);
+        std::memcpy(&s3, words_[3].data(), sizeof s3);
+    }
+    AMB_FAST_ALWAYS_INLINE void store(const Words& s0, const Words& s1, const Words& s2, const Words& s3) {
+        std::memcpy(words_[0].data(), &s0, sizeof s0);
+        std::memcpy(words_[1].data(), &s1, sizeof s1);
+        std::memcpy(words_[2].data(), &s2, sizeof s2);
+        std::memcpy(words_[3].data(), &s3, sizeof s3);
+    }
+    std::array<std::uint64_t, 4> lane_state(std::size_t g) const {
+        return {words_[0][g], words_[1][g], words_[2][g], words_[3][g]};
+    }
+
+    std::array<std::array<std::uint64_t, K>, 4> words_{};  // words_[w][g]: word w of lane g's state
+    std::array<NormalStream*, K> streams_{};
+    NormalStream spare_;
+};
+#endif
 
 }  // namespace amb_fast
