@@ -228,6 +228,36 @@ int main() {
         b.fill(cut.data(), 33333, 1.0);
         b.fill(cut.data() + 33333, 66667, 1.0);
         check(one == cut, "noise stream in pieces equals one call");
+#if AMB_FAST_LANES_OK
+        {  // streams side by side in SIMD lanes: each lane exactly its own stream, rare paths included
+            std::vector<NormalStream> streams, alone;
+            for (std::uint64_t seed : {3u, 4u, 5u}) streams.emplace_back(seed), alone.emplace_back(seed);
+            std::vector<NormalStream*> ptr;
+            for (auto& st : streams) ptr.push_back(&st);
+            NormalLanes<2> two(ptr.data(), 2);
+            std::vector<double> lanes(2 * 30000), own(30000);
+            two.fill(lanes.data(), 10000, 2.0);
+            two.fill(lanes.data() + 20000, 20000, 2.0);  // in pieces, as a run's chunks
+            two.commit();
+            bool same = true;
+            for (std::size_t g = 0; g < 2; ++g) {
+                alone[g].fill(own.data(), 30000, 2.0);
+                for (std::size_t j = 0; j < 30000; ++j) same = same && lanes[2 * j + g] == own[j];
+            }
+            alone[0].fill(own.data(), 10, 1.0);  // and the streams continue where their lanes stopped
+            streams[0].fill(lanes.data(), 10, 1.0);
+            for (std::size_t j = 0; j < 10; ++j) same = same && lanes[j] == own[j];
+            NormalLanes<4> four(ptr.data(), 3);  // a spare lane, discarded
+            std::vector<double> wide(4 * 5000);
+            four.fill(wide.data(), 5000, 1.0);
+            four.commit();
+            for (std::size_t g = 0; g < 3; ++g) {
+                alone[g].fill(own.data(), 5000, 1.0);
+                for (std::size_t j = 0; j < 5000; ++j) same = same && wide[4 * j + g] == own[j];
+            }
+            check(same, "noise streams side by side in lanes equal each stream alone bit for bit");
+        }
+#endif
         double mean = 0.0, var = 0.0;
         for (double z : one) mean += z / 1e5, var += z * z / 1e5;
         check(std::abs(mean) < 5 / std::sqrt(1e5) && std::abs(var - 1) < 5 * std::sqrt(2 / 1e5), "noise moments");
