@@ -34,6 +34,7 @@ def main() -> None:
     args = arguments(__doc__, "bench_core")
 
     long_n, slow_n, repeats = (20_000, 2_000, 3) if args.quick else (1_000_000, 20_000, 15)
+    cached_n = 20_000
     rig, pid = af.Rig.paper(), af.PID.paper()
     quiet = replace(rig, sensor_noise=0.0, force_noise=0.0)
     six = pid.to_controller() * af.notch(700.0) * af.low_pass(1500.0, order=2)
@@ -63,6 +64,19 @@ def main() -> None:
             lambda: af.simulate(replace(rig, force_law="nonlinear"), pid, 0.01 * force, seed=1), long_n, repeats
         ),
         "scipy.signal.lfilter (closed-loop TF)": per_sample(lambda: signal.lfilter(b[0], a, force), long_n, repeats),
+        # A record that stays in cache: the loop's own cost, without writing 24 MB of fresh output.
+        "amb_fast linear, paper rig, noise on, 2e4 samples": per_sample(
+            lambda: af._core.simulate(core_rig, core_pid, force[:cached_n], 1), cached_n, 20 * repeats
+        ),
+        "amb_fast linear, paper rig, noise off, 2e4 samples": per_sample(
+            lambda: af._core.simulate(core_quiet, core_pid, force[:cached_n], 1), cached_n, 20 * repeats
+        ),
+        "amb_fast linear, 6-state controller, noise off, 2e4 samples": per_sample(
+            lambda: af._core.simulate(core_quiet, core_six, force[:cached_n], 1), cached_n, 20 * repeats
+        ),
+        "scipy.signal.lfilter (closed-loop TF), 2e4 samples": per_sample(
+            lambda: signal.lfilter(b[0], a, force[:cached_n]), cached_n, 20 * repeats
+        ),
         "numpy reference loop": per_sample(lambda: reference.simulate(rig, pid, short), slow_n, max(1, repeats // 5)),
         "scipy.signal.dlsim": per_sample(lambda: signal.dlsim((A, B, C, D, dt), short), slow_n, max(1, repeats // 5)),
     }
@@ -79,7 +93,10 @@ def main() -> None:
 
     core = timings["amb_fast linear, paper rig, noise on"]
     quiet_core = timings["amb_fast linear, paper rig, noise off"]
-    print(f"closed-loop order {A.shape[0]}, {long_n} samples (slow peers: {slow_n}), median of {repeats}")
+    print(
+        f"closed-loop order {A.shape[0]}, {long_n} samples (slow peers: {slow_n}; in cache: {cached_n}), "
+        f"median of {repeats}"
+    )
     ratios = {name + " / core": seconds / core for name, seconds in timings.items()}
     ratios |= {
         "numpy reference / core (target >= 300)": timings["numpy reference loop"] / core,
@@ -87,6 +104,14 @@ def main() -> None:
         "core, noise off / lfilter (target <= 1.5)": quiet_core / timings["scipy.signal.lfilter (closed-loop TF)"],
         "6-state controller / PID, noise off (target <= 1.5)": (
             timings["amb_fast linear, 6-state controller, noise off"] / quiet_core
+        ),
+        "6-state controller / PID, noise off, 2e4 samples": (
+            timings["amb_fast linear, 6-state controller, noise off, 2e4 samples"]
+            / timings["amb_fast linear, paper rig, noise off, 2e4 samples"]
+        ),
+        "core, noise off / lfilter, 2e4 samples": (
+            timings["amb_fast linear, paper rig, noise off, 2e4 samples"]
+            / timings["scipy.signal.lfilter (closed-loop TF), 2e4 samples"]
         ),
         "nonlinear / linear, noise on (target <= 10)": timings["amb_fast nonlinear, noise on"] / core,
     }
