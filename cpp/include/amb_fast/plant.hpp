@@ -124,12 +124,18 @@ struct CascadeCoefficients {
     AMB_FAST_ALWAYS_INLINE void advance_rows(T& xy, T& xv, T& xi, T& xf, T& xs, double f, T u) const {
         const T ny = (yy * xy + yv * xv) + (yi * xi + yf * xf) + (y_f * f + y_u * u);
         const T nv = (vy * xy + vv * xv) + (vi * xi + vf * xf) + (v_f * f + v_u * u);
+        xs = advance_lags(xy, xv, xi, xf, xs, f, u);
+        xy = ny;
+        xv = nv;
+    }
+    // The rows after y and v: the sensor's new value returned, the eddy and coil currents advanced,
+    // all from the old state.
+    template <class T>
+    AMB_FAST_ALWAYS_INLINE T advance_lags(T xy, T xv, T& xi, T& xf, T xs, double f, T u) const {
         const T ns = ((sy * xy + sv * xv) + (si * xi + sf * xf)) + (ss * xs + (s_f * f + s_u * u));
         xf = (fi * xi + ff * xf) + f_u * u;
         xi = ii * xi + i_u * u;
-        xy = ny;
-        xv = nv;
-        xs = ns;
+        return ns;
     }
     // The same with the previous command u_prev felt over the dead time's fraction of the sample.
     template <class T>
@@ -171,12 +177,9 @@ struct CascadeMap : CascadeCoefficients<double> {
         // y and v rows side by side: each lane does the scalar rows' operations in their order.
         const Pair n = ((pair_y * xy + pair_v * xv) + (pair_i * xi + pair_f * xf)) + (pair_force * f + pair_u * u);
         const double ny = n[0], nv = n[1];
-        const double ns = ((sy * xy + sv * xv) + (si * xi + sf * xf)) + (ss * xs + (s_f * f + s_u * u));
-        xf = (fi * xi + ff * xf) + f_u * u;
-        xi = ii * xi + i_u * u;
+        xs = advance_lags(xy, xv, xi, xf, xs, f, u);
         xy = ny;
         xv = nv;
-        xs = ns;
 #else
         advance_rows(xy, xv, xi, xf, xs, f, u);
 #endif
