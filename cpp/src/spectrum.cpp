@@ -199,6 +199,18 @@ void accumulate(Eigen::VectorXd& acc, const double* x, Eigen::Index L, Eigen::In
 void PeriodEstimator::add_periods(const double* force, const double* displacement, Eigen::Index count,
                                   Eigen::Index first_sample) {
     const Eigen::Index L = plan_.period;
+    if (plan_.periods_per_block == 1) {  // each period is a block: its mean is the period, no sum needed
+        for (; count > 0; --count, force += L, displacement += L, first_sample += L) {
+            block_first_ = first_sample;
+            // 0 + x, as a sum into the zeroed block gives (-0.0 becomes +0.0), so the digits are the same.
+            block_f_ = Eigen::Map<const Eigen::VectorXd>(force, L).array() + 0.0;
+            block_y_ = Eigen::Map<const Eigen::VectorXd>(displacement, L).array() + 0.0;
+            ++periods_;
+            in_block_ = 1;
+            close_block();
+        }
+        return;
+    }
     while (count > 0) {
         if (in_block_ == 0) block_first_ = first_sample;
         const Eigen::Index m = std::min(count, plan_.periods_per_block - in_block_);
@@ -243,8 +255,10 @@ void PeriodEstimator::close_block() {
     if (new_f) previous_f_.swap(block_f_);
     if (new_y) previous_y_.swap(block_y_);
     have_previous_ = true;
-    block_f_.setZero(L);
-    block_y_.setZero(L);
+    if (plan_.periods_per_block > 1) {  // with one period per block, the next period overwrites them
+        block_f_.setZero(L);
+        block_y_.setZero(L);
+    }
     // The averaged spectra are the sum of the blocks' (the transform is linear): no extra FFT.
     const double G = static_cast<double>(plan_.periods_per_block);
     sum_F_ += G * lines_f_;
@@ -271,7 +285,7 @@ LineEstimate PeriodEstimator::estimate(double mass, double fs, int median_window
     require(blocks_ >= 2, "periods", periods_, "enough for at least 2 independent periods (standard errors)");
     require(median_window >= 1 && median_window % 2 == 1, "median_window", median_window, "an odd number >= 1");
     const Eigen::Index L = plan_.period, n = static_cast<Eigen::Index>(plan_.excited.size());
-    require_finite_block();  // the periods that did not fill a last block
+    if (in_block_ > 0) require_finite_block();  // the periods that did not fill a last block
     LineEstimate e;
     e.periods = periods_;
     e.blocks = blocks_;
