@@ -123,12 +123,19 @@ def _run_chunk(
         settle = np.full(n, settle_periods)
     plan, unexcited = _plan(excitation.harmonics, excitation.period_samples)
     lines = len(excitation.harmonics)
-    out: dict[str, np.ndarray] = {name: np.full((n, lines), np.nan) for name in _CORE_FIELDS[:-2]}
-    out["H"] = np.full((n, lines), np.nan + 0j)
-    out["unexcited_displacement"] = np.full((n, len(unexcited)), np.nan)
-    out["status"] = np.full(n, STATUS.index("unstable"), dtype=np.int32)
-    out["settle_periods"] = settle.astype(np.int64)
+    out: dict[str, np.ndarray] = {}
+
+    def unstable_until_run() -> None:  # NaN rows and "unstable" wherever the core's rows do not land
+        for name in _CORE_FIELDS[:-2]:
+            out[name] = np.full((n, lines), np.nan)
+        out["H"] = np.full((n, lines), np.nan + 0j)
+        out["unexcited_displacement"] = np.full((n, len(unexcited)), np.nan)
+        out["status"] = np.full(n, STATUS.index("unstable"), dtype=np.int32)
+
+    settle64 = settle.astype(np.int64)
     rows = np.flatnonzero(stable)
+    if rows.size < n:
+        unstable_until_run()
     if rows.size:
         masses = {models[j][0].mass for j in rows}
         require(len(masses) == 1, "mass", sorted(masses), "the same at every point of a sweep (kg)")
@@ -136,27 +143,37 @@ def _run_chunk(
         def core_call(pick: np.ndarray):  # noqa: ANN202
             at = rows[pick]
             return _core.run_sweep(excitation.samples, [models[j][0]._to_core() for j in at],
-                                   [core_controller(models[j][1]) for j in at], out["settle_periods"][at],
+                                   [core_controller(models[j][1]) for j in at], settle64[at],
                                    seeds[at], periods, plan, window, workers, start == "steady", cancel)  # fmt: skip
 
         everything = np.arange(rows.size)
         try:
             parts = [(everything, core_call(everything))]
         except (ValueError, OverflowError):  # a point diverged (e.g. under saturation): find it, flag it
+            if not out:
+                unstable_until_run()
             parts = []
             for j in everything:
                 try:
                     parts.append((everything[j : j + 1], core_call(everything[j : j + 1])))
                 except (ValueError, OverflowError):
                     out["status"][rows[j]] = STATUS_NAMES.index(OVERFLOW)
-        for pick, core in parts:
+        if rows.size == n and len(parts) == 1:  # every point in one call: its arrays are the results
             for name in _CORE_FIELDS:
-                out[name][rows[pick]] = np.asarray(getattr(core, name))
+                out[name] = np.asarray(getattr(parts[0][1], name))
+            out["status"] = out["status"].copy()  # read-only view of the core's; edited below
+        else:
+            if not out:
+                unstable_until_run()
+            for pick, core in parts:
+                for name in _CORE_FIELDS:
+                    out[name][rows[pick]] = np.asarray(getattr(core, name))
         for j in rows:  # no clearance to touch on the linear law: the state overflowed
             point_rig = models[j][0]
             unbounded = point_rig.force_law == "linear" and point_rig.clearance is None
             if out["status"][j] == STATUS.index("touchdown") and unbounded:
                 out["status"][j] = STATUS_NAMES.index(OVERFLOW)
+    out["settle_periods"] = settle64
     return out
 
 
