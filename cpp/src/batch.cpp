@@ -22,15 +22,12 @@ void store(SweepEstimates& out, Eigen::Index row, const LineEstimate& e) {
         return;
     }
     out.H.row(row) = e.H.transpose();
-    out.force.row(row) = e.force.transpose();
-    out.displacement.row(row) = e.displacement.transpose();
     out.k.row(row) = e.k.transpose();
     out.c.row(row) = e.c.transpose();
     out.k_std.row(row) = e.k_std.transpose();
     out.c_std.row(row) = e.c_std.transpose();
     out.k_smooth.row(row) = e.k_smooth.transpose();
     out.c_smooth.row(row) = e.c_smooth.transpose();
-    out.unexcited_force.row(row) = e.unexcited_force.transpose();
     out.unexcited_displacement.row(row) = e.unexcited_displacement.transpose();
     out.status[row] = static_cast<int>(PointStatus::ok);
 }
@@ -158,9 +155,8 @@ SweepEstimates run_sweep(const Eigen::Ref<const Eigen::VectorXd>& period_force, 
     const Eigen::Index gaps = static_cast<Eigen::Index>(plan.unexcited.size());
     const double nan = std::numeric_limits<double>::quiet_NaN();
     SweepEstimates out;
-    for (auto* m : {&out.H, &out.force, &out.displacement}) m->setConstant(n, lines, {nan, nan});
+    out.H.setConstant(n, lines, {nan, nan});
     for (auto* m : {&out.k, &out.c, &out.k_std, &out.c_std, &out.k_smooth, &out.c_smooth}) m->setConstant(n, lines, nan);
-    out.unexcited_force.setConstant(n, gaps, nan);
     out.unexcited_displacement.setConstant(n, gaps, nan);
     out.status.setConstant(n, static_cast<int>(PointStatus::ok));
     out.periods = periods;

@@ -25,8 +25,9 @@ using RowMatrixXcd = Eigen::Matrix<std::complex<double>, Eigen::Dynamic, Eigen::
 
 // One row per point, one column per excited (or unexcited) line; rows of points that are not ok are NaN.
 struct SweepEstimates {
-    RowMatrixXcd H, force, displacement;
-    RowMatrixXd k, c, k_std, c_std, k_smooth, c_smooth, unexcited_force, unexcited_displacement;
+    // What a sweep returns per point; the lines' force and displacement amplitudes are not kept.
+    RowMatrixXcd H;
+    RowMatrixXd k, c, k_std, c_std, k_smooth, c_smooth, unexcited_displacement;
     Eigen::VectorXi status;  // PointStatus
     Eigen::Index periods = 0, blocks = 0;
 };
