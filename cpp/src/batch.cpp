@@ -32,16 +32,8 @@ void store(SweepEstimates& out, Eigen::Index row, const LineEstimate& e) {
     out.status[row] = static_cast<int>(PointStatus::ok);
 }
 
-// Points that can share lock step: the same rig (so the same plant map, transducer and noise levels),
-// and controllers of the same capacity, delay and sample rate.
-bool same_group(const SweepPoint& a, const SweepPoint& b) {
-    return a.rig == b.rig && controller_capacity(a.controller.order()) == controller_capacity(b.controller.order()) &&
-           a.controller.delay == b.controller.delay && a.controller.fs == b.controller.fs;
-}
-
-// What a worker reuses from one group of points to the next: allocating and freeing it per group made
-// the two threads of a sweep wait on each other in the allocator and the kernel (pages returned to the
-// system and faulted in again), so that 40 points ran only 1.4x faster on two threads than on one.
+// What a worker reuses from one group of points to the next, instead of allocating and freeing it per
+// group (which can return the pages to the system and fault them in again).
 struct Workspace {
     Workspace(const LinePlan& plan, Eigen::Index lanes)
         : estimators(static_cast<std::size_t>(lanes), PeriodEstimator(plan)),
@@ -125,7 +117,12 @@ void run_points(const Eigen::VectorXd& period_force, const SweepPoint* points, E
         }
         Eigen::Index lanes = 1;
         const Eigen::Index most = lanes_available();
-        while (lanes < most && start + lanes < count && same_group(head, points[start + lanes])) ++lanes;
+        // Points that can share lanes: the same rig (plant map, transducer, noise levels), controllers of
+        // one capacity, delay and sample rate.
+        const auto fits = [&](const SweepPoint& p) {
+            return Loop::can_share_lanes(head.rig, head.controller, p.rig, p.controller);
+        };
+        while (lanes < most && start + lanes < count && fits(points[start + lanes])) ++lanes;
         run_linear_group(period_force, points + start, lanes, periods, median_window, steady_start, out,
                          first_row + start, work);
         start += lanes;

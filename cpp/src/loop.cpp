@@ -117,12 +117,7 @@ AMB_FAST_ALWAYS_INLINE void run_samples(const Map& map, const ControlLaw<N, T>& 
         if constexpr (draw) draws.out[j] = draws.sigma * (*draws.stream)();
         const T e = (sensed == state::ys ? xs : xy) + noise[j];
         T wanted = law(e, s.data());
-        if (d > 0) {  // u[k - d] out, u[k] in
-            const T held = line[head];
-            line[head] = wanted;
-            if (++head == d) head = 0;
-            wanted = held;
-        }
+        if (d > 0) wanted = pass_through_delay(line, d, head, wanted);
         // The amplifier's limit (with none, clamping to +-Inf would change nothing, not even a bit).
         T u = wanted;
         if constexpr (checked) {
@@ -277,10 +272,13 @@ void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const d
     }
 }
 
+bool Loop::can_share_lanes(const Rig& a, const Controller& ca, const Rig& b, const Controller& cb) {
+    return a.force_law == ForceLaw::linear && a == b && ca.fs == cb.fs && ca.delay == cb.delay &&
+           controller_capacity(ca.order()) == controller_capacity(cb.order());
+}
+
 bool Loop::can_run_beside(const Loop& other) const {
-    return rig_.force_law == ForceLaw::linear && other.rig_.force_law == ForceLaw::linear && rig_ == other.rig_ &&
-           T_ == other.T_ && controller_.capacity() == other.controller_.capacity() &&
-           controller_.controller().delay == other.controller_.controller().delay;
+    return can_share_lanes(rig_, controller_.controller(), other.rig_, other.controller_.controller());
 }
 
 void Loop::run_side_by_side(Loop* const* loops, int count, const double* force, Eigen::Index n, const Channels* out) {

@@ -92,6 +92,16 @@ struct ControlLaw {
     T D;
 };
 
+// A delay line of d > 0 entries, a ring from head: puts u[k] in and returns u[k - d]. T is double for
+// one loop, or a SIMD vector for loops side by side (lanes.hpp).
+template <class T>
+AMB_FAST_ALWAYS_INLINE T pass_through_delay(T* line, std::size_t d, std::size_t& head, T u) {
+    const T held = line[head];
+    line[head] = u;
+    if (++head == d) head = 0;
+    return held;
+}
+
 // The controller with its state and its delay line, for single runs.
 class DigitalController {
 public:
@@ -128,11 +138,7 @@ public:
 
     // Puts u[k] (A) into the delay line and returns u[k - delay].
     double delayed(double u) {
-        if (delay_line_.empty()) return u;
-        const double held = delay_line_[head_];
-        delay_line_[head_] = u;
-        if (++head_ == delay_line_.size()) head_ = 0;
-        return held;
+        return delay_line_.empty() ? u : pass_through_delay(delay_line_.data(), delay_line_.size(), head_, u);
     }
 
 private:

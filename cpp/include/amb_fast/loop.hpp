@@ -100,6 +100,8 @@ public:
                                  const Channels* out);
     // Linear, with the same rig and a controller of the same capacity and delay.
     bool can_run_beside(const Loop& other) const;
+    // The same test on what the loops would be made of (their controllers' own delays).
+    static bool can_share_lanes(const Rig& a, const Controller& ca, const Rig& b, const Controller& cb);
     bool touched_down() const { return touched_down_; }
     // Throws Touchdown if |y| (m) has reached the clearance at this sample.
     void check_clearance(double y, Eigen::Index sample) const;
