@@ -203,6 +203,43 @@ struct LaneKernel<wide_lanes, N, sensed, has_amp, checked, fractional> {
 #endif
 #endif
 
+// Lane g of a value, and setting it: for one loop (double) the value itself.
+inline double get_lane(double v, std::size_t) { return v; }
+inline void set_lane(double& v, std::size_t, double x) { v = x; }
+template <class V>
+double get_lane(const V& v, std::size_t g) {
+    return v[g];
+}
+template <class V>
+void set_lane(V& v, std::size_t g, double x) {
+    v[g] = x;
+}
+
+}  // namespace
+
+// A loop's state into lane g of the kernel's registers (its delay line already sized), and back.
+struct LoopState {
+    template <class T, int N>
+    static void gather(const Loop& loop, LinearState<T, N>& x, std::size_t g) {
+        const auto& z = loop.x_;
+        set_lane(x.y, g, z[state::y]), set_lane(x.v, g, z[state::v]), set_lane(x.i, g, z[state::i]);
+        set_lane(x.f, g, z[state::i_f]), set_lane(x.s_ys, g, z[state::ys]), set_lane(x.u_prev, g, loop.u_prev_);
+        for (int r = 0; r < N; ++r) set_lane(x.s[static_cast<std::size_t>(r)], g, loop.controller_.state()[r]);
+        for (std::size_t j = 0; j < x.line.size(); ++j) set_lane(x.line[j], g, loop.controller_.line(static_cast<int>(j)));
+        x.head = 0;
+    }
+    template <class T, int N>
+    static void scatter(Loop& loop, const LinearState<T, N>& x, std::size_t g) {
+        loop.x_ << get_lane(x.y, g), get_lane(x.v, g), get_lane(x.i, g), get_lane(x.f, g), get_lane(x.s_ys, g);
+        loop.u_prev_ = get_lane(x.u_prev, g);
+        for (int r = 0; r < N; ++r) loop.controller_.state()[r] = get_lane(x.s[static_cast<std::size_t>(r)], g);
+        const std::size_t d = x.line.size();
+        for (std::size_t j = 0; j < d; ++j) loop.controller_.set_line(static_cast<int>(j), get_lane(x.line[(x.head + j) % d], g));
+    }
+};
+
+namespace {
+
 // Calls f(sensed, has_amp, checked, fractional) with each as a compile-time constant, so the state
 // stays in registers and the common case pays for no checks.
 template <class F>
@@ -231,11 +268,9 @@ bool Loop::checked() const { return std::isfinite(limit_) || std::isfinite(touch
 void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const double* noise, double* force_noise) {
     with_capacity(controller_.capacity(), [&](auto N) {
         constexpr int n_ = decltype(N)::value;
-        LinearState<double, n_> x{x_[state::y], x_[state::v], x_[state::i], x_[state::i_f], x_[state::ys], u_prev_, {}, {}, 0};
-        std::copy_n(controller_.state(), n_, x.s.begin());
-        const int d = controller_.controller().delay;
-        x.line.resize(static_cast<std::size_t>(d));
-        for (int j = 0; j < d; ++j) x.line[static_cast<std::size_t>(j)] = controller_.line(j);
+        LinearState<double, n_> x;
+        x.line.resize(static_cast<std::size_t>(controller_.controller().delay));
+        LoopState::gather(*this, x, 0);
         // Local copies: the coefficients stay in registers instead of being reloaded after every store
         // to the output arrays (which the compiler must assume may alias them).
         const CascadeMap map = *map_;
@@ -258,10 +293,7 @@ void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const d
                                                                       out.current, limit_, watch, *this, k_);
         });
         if (local) local->commit();
-        x_ << x.y, x.v, x.i, x.f, x.s_ys;
-        u_prev_ = x.u_prev;
-        std::copy_n(x.s.begin(), n_, controller_.state());
-        for (int j = 0; j < d; ++j) controller_.set_line(j, x.line[(x.head + static_cast<std::size_t>(j)) % x.line.size()]);
+        LoopState::scatter(*this, x, 0);
         saturated_ += watch.saturated;
     });
     // Inf and NaN never turn finite again in a linear recursion, so one check per chunk suffices.
@@ -325,17 +357,14 @@ void Loop::run_lanes(Loop* const* loops, int count, const double* force, Eigen::
         // Gather: lane g holds loop g (spare lanes repeat loop 0 and are never written back).
         alignas(sizeof(V)) LinearState<V, n_> x;
         alignas(sizeof(V)) ControlLaw<n_, V> law;
-        const int d = head.controller_.controller().delay;
-        x.line.resize(static_cast<std::size_t>(d));
+        x.line.resize(static_cast<std::size_t>(head.controller_.controller().delay));
         for (std::size_t g = 0; g < lanes; ++g) {
             const Loop& lp = *loops[g < static_cast<std::size_t>(count) ? g : 0];
-            x.y[g] = lp.x_[state::y], x.v[g] = lp.x_[state::v], x.i[g] = lp.x_[state::i];
-            x.f[g] = lp.x_[state::i_f], x.s_ys[g] = lp.x_[state::ys], x.u_prev[g] = lp.u_prev_;
+            LoopState::gather(lp, x, g);
             const ControlLaw<n_>& own = lp.controller_.law<n_>();
-            for (int r = 0; r < n_; ++r) x.s[r][g] = lp.controller_.state()[r], law.B[r][g] = own.B[r], law.C[r][g] = own.C[r];
+            for (int r = 0; r < n_; ++r) law.B[r][g] = own.B[r], law.C[r][g] = own.C[r];
             for (int r = 0; r < n_ * n_; ++r) law.At[r][g] = own.At[r];
             law.D[g] = own.D;
-            for (int j = 0; j < d; ++j) x.line[static_cast<std::size_t>(j)][g] = lp.controller_.line(j);
         }
         for (Eigen::Index start = 0; start < n; start += chunk) {
             poll_interrupt();
@@ -372,11 +401,7 @@ void Loop::run_lanes(Loop* const* loops, int count, const double* force, Eigen::
         // Scatter: each loop gets its lane back.
         for (int g = 0; g < count; ++g) {
             Loop& lp = *loops[g];
-            lp.x_ << x.y[g], x.v[g], x.i[g], x.f[g], x.s_ys[g];
-            lp.u_prev_ = x.u_prev[g];
-            for (int r = 0; r < n_; ++r) lp.controller_.state()[r] = x.s[r][g];
-            for (int j = 0; j < d; ++j)
-                lp.controller_.set_line(j, x.line[(x.head + static_cast<std::size_t>(j)) % static_cast<std::size_t>(d)][g]);
+            LoopState::scatter(lp, x, static_cast<std::size_t>(g));
             if (!lp.touched_down_ && !lp.x_.allFinite())
                 lp.fail(lp.k_, "the displacement became non-finite: the loop is unstable");
         }

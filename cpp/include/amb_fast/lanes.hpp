@@ -102,6 +102,7 @@ public:
     T* data() { return data_.get(); }
     std::size_t size() const { return size_; }
     T& operator[](std::size_t k) { return data_[k]; }
+    const T& operator[](std::size_t k) const { return data_[k]; }
 
 private:
     static constexpr std::size_t alignment = sizeof(T) > alignof(T) ? sizeof(T) : alignof(T);
