@@ -150,10 +150,8 @@ public:
     // One standard normal deviate.
     AMB_FAST_ALWAYS_INLINE double operator()() {
         const std::uint64_t bits = rng_();
-        const auto layer = static_cast<std::size_t>(bits & 0xff);
-        const std::uint64_t abscissa = bits >> 12;  // 52 bits, disjoint from the layer's 8 and the sign bit
-        if (abscissa < zig_->k[layer]) return signed_by(abscissa_value(abscissa, layer), bits);  // most draws
-        return rare(bits);
+        double x;
+        return in_rectangle(*zig_, bits, x) ? x : rare(bits);
     }
 
     // The stream drawn through a copy of its generator that a hot loop keeps in registers: the same
@@ -164,9 +162,8 @@ public:
         explicit Local(NormalStream& stream) : stream_(&stream), rng_(stream.rng_), zig_(stream.zig_) {}
         AMB_FAST_ALWAYS_INLINE double operator()() {
             const std::uint64_t bits = rng_();
-            const auto layer = static_cast<std::size_t>(bits & 0xff);
-            const std::uint64_t abscissa = bits >> 12;
-            if (abscissa < zig_->k[layer]) return signed_by(NormalStream::abscissa_value(*zig_, abscissa, layer), bits);
+            double x;
+            if (in_rectangle(*zig_, bits, x)) return x;
             stream_->rng_ = rng_;
             const double z = stream_->rare(bits);
             rng_ = stream_->rng_;
@@ -193,6 +190,16 @@ private:
     template <int K>
     friend class NormalLanes;
 
+    // The fast path (most draws): true, with the deviate in x, when the draw's point lies in its layer's
+    // rectangle, wholly under the density. The layer is the low 8 bits, the abscissa the top 52.
+    static AMB_FAST_ALWAYS_INLINE bool in_rectangle(const random_detail::Ziggurat& z, std::uint64_t bits, double& x) {
+        const auto layer = static_cast<std::size_t>(bits & 0xff);
+        const std::uint64_t abscissa = bits >> 12;  // 52 bits, disjoint from the layer's 8 and the sign bit
+        if (abscissa >= z.k[layer]) return false;
+        x = signed_by(abscissa_value(z, abscissa, layer), bits);
+        return true;
+    }
+
     // The sign comes from bit 8 of the draw, set without a branch (the fast path stays branch-free).
     static double signed_by(double x, std::uint64_t bits) {
         std::uint64_t u = 0;
@@ -204,7 +211,6 @@ private:
     static double abscissa_value(const random_detail::Ziggurat& z, std::uint64_t abscissa, std::size_t layer) {
         return static_cast<double>(static_cast<std::int64_t>(abscissa)) * z.w[layer];  // exact below 2^52
     }
-    double abscissa_value(std::uint64_t abscissa, std::size_t layer) const { return abscissa_value(*zig_, abscissa, layer); }
 
     // Outside the rectangles (1.5 % of draws): the wedge test or the tail, else a fresh draw.
     double rare(std::uint64_t bits) {
@@ -212,7 +218,7 @@ private:
         for (;;) {
             const auto layer = static_cast<std::size_t>(bits & 0xff);
             const std::uint64_t abscissa = bits >> 12;
-            const double x = abscissa_value(abscissa, layer);
+            const double x = abscissa_value(z, abscissa, layer);
             if (abscissa < z.k[layer]) return signed_by(x, bits);
             if (layer == 0) return signed_by(tail(), bits);
             // The wedge between the rectangle and the density: an exact test with a second uniform.
