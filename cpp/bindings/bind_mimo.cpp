@@ -1,4 +1,4 @@
-#include "amb_fast/mimo.hpp"
+#include "amb_fast/mimo_lines.hpp"
 #include "bindings.hpp"
 
 #include <pybind11/complex.h>
@@ -123,7 +123,8 @@ void bind_mimo(py::module_& m) {
         py::arg("periods"), py::arg("seeds"), py::arg("steady_start"), py::arg("bins"),
         "mimo_experiments reduced to the unscaled DFT of every recorded period at the given bins: returns the force "
         "and displacement line spectra, complex, (periods, bins, channels, experiments). With steady_start the "
-        "transducer noise is drawn in the frequency domain (exact in distribution). Releases the GIL.");
+        "spectra are drawn directly, exact in distribution (mimo_lines.hpp), and the bins must lie strictly "
+        "between 0 and period / 2. Releases the GIL.");
     m.def(
         "estimate_2x2",
         [](const py::array_t<std::complex<double>, py::array::c_style | py::array::forcecast>& force_lines,

@@ -16,8 +16,6 @@
 
 namespace amb_fast {
 
-namespace {
-// Independent stream seeds for source j of a kind (splitmix64 of the run's seed, the kind and j).
 std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t kind, Eigen::Index j) {
     std::uint64_t x = seed + 0x9e3779b97f4a7c15ULL * (2 * static_cast<std::uint64_t>(j) + kind + 1);
     x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
@@ -25,6 +23,7 @@ std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t kind, Eigen::Index j
     return x ^ (x >> 31);
 }
 
+namespace {
 void require_shape(const Eigen::MatrixXd& X, Eigen::Index rows, Eigen::Index cols, const char* name) {
     if (X.rows() == rows && X.cols() == cols && X.allFinite()) return;
     std::ostringstream msg;
@@ -443,147 +442,6 @@ void mimo_experiments(const MimoModel& model, const double* const* period_force,
                 Eigen::Map<Eigen::RowVectorXd>(measured[l] + j * length + first, L) = out[l].row(j);
         }
     }
-}
-
-void mimo_line_experiments(const MimoModel& model, const double* const* period_force, Eigen::Index L,
-                           Eigen::Index settle_periods, Eigen::Index periods, const std::vector<std::uint64_t>& seeds,
-                           bool steady_start, const std::vector<Eigen::Index>& bins, std::complex<double>* force_lines,
-                           std::complex<double>* displacement_lines) {
-    require(L > 0, "period", L, "> 0 samples");
-    require(settle_periods >= 0, "settle_periods", settle_periods, ">= 0");
-    require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
-    const auto K = static_cast<Eigen::Index>(seeds.size());
-    for (Eigen::Index l = 0; l < K; ++l) require_finite_samples("excitation", period_force[l], L * model.forces());
-    const Eigen::Index p = model.forces(), q = model.probes(), r = model.outputs();
-    const auto B = static_cast<Eigen::Index>(bins.size());
-    MimoModel run_model = model;
-    if (steady_start) run_model.force_noise.setZero();  // drawn in the frequency domain below
-    MimoLoop loop(run_model, seeds);
-    if (steady_start) loop.start_periodic(period_force, L);
-    LineTransform transform(L, bins, LineTransform::Method::fft);
-    std::vector<Eigen::MatrixXd> rec(static_cast<std::size_t>(K), Eigen::MatrixXd(p, L)),
-        out(static_cast<std::size_t>(K), Eigen::MatrixXd(r, L));  // column k = sample k
-    std::vector<double*> rec_ptr, out_ptr;
-    for (Eigen::Index l = 0; l < K; ++l) {
-        rec_ptr.push_back(rec[static_cast<std::size_t>(l)].data());
-        out_ptr.push_back(out[static_cast<std::size_t>(l)].data());
-    }
-    Eigen::VectorXd row(L), row2(L);
-    std::vector<std::complex<double>> spectrum(static_cast<std::size_t>(B)), spectrum2(spectrum.size());
-    // lines[((period * B + j) * channels + channel) * K + l] = spectrum[j]
-    auto put = [&](std::complex<double>* lines, Eigen::Index period, Eigen::Index channels, Eigen::Index channel,
-                   Eigen::Index l) {
-        for (Eigen::Index j = 0; j < B; ++j)
-            lines[((period * B + j) * channels + channel) * K + l] = spectrum[static_cast<std::size_t>(j)];
-    };
-    for (Eigen::Index k = 0; k < settle_periods + periods; ++k) {
-        loop.run(period_force, L, rec_ptr.data(), out_ptr.data());
-        if (k < settle_periods) continue;
-        const Eigen::Index period = k - settle_periods;
-        for (Eigen::Index l = 0; l < K; ++l) {
-            Eigen::Index c = 0;
-            for (; c + 2 <= q; c += 2) {  // two probes at once: the same digits, side by side in SIMD lanes
-                row = out[static_cast<std::size_t>(l)].row(c).transpose();
-                row2 = out[static_cast<std::size_t>(l)].row(c + 1).transpose();
-                transform(row.data(), row2.data(), spectrum.data(), spectrum2.data());
-                put(displacement_lines, period, q, c, l);
-                spectrum.swap(spectrum2);
-                put(displacement_lines, period, q, c + 1, l);
-            }
-            for (; c < q; ++c) {
-                row = out[static_cast<std::size_t>(l)].row(c).transpose();
-                transform(row.data(), spectrum.data());
-                put(displacement_lines, period, q, c, l);
-            }
-            if (steady_start && period > 0) continue;
-            for (Eigen::Index c = 0; c < p; ++c) {
-                row = rec[static_cast<std::size_t>(l)].row(c).transpose();
-                transform(row.data(), spectrum.data());
-                put(force_lines, period, p, c, l);
-            }
-        }
-    }
-    if (!steady_start) return;
-    // Every period's force lines: the first period's plus the transducer noise, N(0, L sigma^2 / 2) in
-    // the real and in the imaginary part, drawn per experiment and channel (line by line, period by period).
-    for (Eigen::Index l = 0; l < K; ++l)
-        for (Eigen::Index c = 0; c < p; ++c) {
-            const double sigma = std::sqrt(0.5 * static_cast<double>(L)) * model.force_noise[c];
-            NormalStream draws(stream_seed(seeds[static_cast<std::size_t>(l)], 2, c));
-            for (Eigen::Index j = 0; j < B; ++j) spectrum[static_cast<std::size_t>(j)] = force_lines[(j * p + c) * K + l];
-            for (Eigen::Index period = 0; period < periods; ++period)
-                for (Eigen::Index j = 0; j < B; ++j) {
-                    std::complex<double> value = spectrum[static_cast<std::size_t>(j)];
-                    if (sigma > 0.0) {
-                        const double re = draws(), im = draws();
-                        value += std::complex<double>(sigma * re, sigma * im);
-                    }
-                    force_lines[((period * B + j) * p + c) * K + l] = value;
-                }
-        }
-}
-
-Estimate2x2 estimate_2x2(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines,
-                         Eigen::Index periods, Eigen::Index lines) {
-    using cd = std::complex<double>;
-    using M2 = Eigen::Matrix2cd;
-    require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
-    Estimate2x2 est;
-    est.lines = lines;
-    est.periods = periods;
-    const auto n = static_cast<std::size_t>(4 * lines);
-    est.H.resize(n);
-    est.receptance.resize(n);
-    est.force.resize(n);
-    est.displacement.resize(n);
-    est.var_re.resize(n);
-    est.var_im.resize(n);
-    // [period][line][channel][experiment]: one 2x2 matrix (row: channel, column: experiment), row-major.
-    auto matrix = [&](const cd* lines_of, Eigen::Index period, Eigen::Index j) {
-        const cd* x = lines_of + (period * lines + j) * 4;
-        M2 A;
-        A << x[0], x[1], x[2], x[3];
-        return A;
-    };
-    auto store = [](std::vector<cd>& to, Eigen::Index j, const M2& A) {
-        for (int i = 0; i < 2; ++i)
-            for (int c = 0; c < 2; ++c) to[static_cast<std::size_t>(4 * j + 2 * i + c)] = A(i, c);
-    };
-    auto inverse = [](const M2& A) {
-        const cd det = A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0);
-        M2 inv;
-        inv << A(1, 1) / det, -A(0, 1) / det, -A(1, 0) / det, A(0, 0) / det;
-        return inv;
-    };
-    const double scale = 1.0 / static_cast<double>(periods * (periods - 1));
-    for (Eigen::Index j = 0; j < lines; ++j) {
-        M2 F = M2::Zero(), Y = M2::Zero();
-        for (Eigen::Index period = 0; period < periods; ++period) {
-            F += matrix(force_lines, period, j);
-            Y += matrix(displacement_lines, period, j);
-        }
-        F /= static_cast<double>(periods);
-        Y /= static_cast<double>(periods);
-        if (!F.allFinite() || !Y.allFinite()) throw std::invalid_argument("force and displacement must be finite");
-        const M2 Yinv = inverse(Y);
-        const M2 H = F * Yinv;
-        Eigen::Matrix2d re = Eigen::Matrix2d::Zero(), im = Eigen::Matrix2d::Zero();
-        for (Eigen::Index period = 0; period < periods; ++period) {
-            const M2 dH = ((matrix(force_lines, period, j) - F) - H * (matrix(displacement_lines, period, j) - Y)) * Yinv;
-            re += dH.real().cwiseAbs2();
-            im += dH.imag().cwiseAbs2();
-        }
-        store(est.H, j, H);
-        store(est.receptance, j, inverse(H));
-        store(est.force, j, F);
-        store(est.displacement, j, Y);
-        for (int i = 0; i < 2; ++i)
-            for (int c = 0; c < 2; ++c) {
-                est.var_re[static_cast<std::size_t>(4 * j + 2 * i + c)] = re(i, c) * scale;
-                est.var_im[static_cast<std::size_t>(4 * j + 2 * i + c)] = im(i, c) * scale;
-            }
-    }
-    return est;
 }
 
 }  // namespace amb_fast

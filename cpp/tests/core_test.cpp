@@ -10,12 +10,14 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
+
 #include "amb_fast/batch.hpp"
 #include "amb_fast/errors.hpp"
 #include "amb_fast/experiment.hpp"
 #include "amb_fast/loop.hpp"
 #include "amb_fast/random.hpp"
-#include "amb_fast/mimo.hpp"
+#include "amb_fast/mimo_lines.hpp"
 #include "amb_fast/spectrum.hpp"
 
 using namespace amb_fast;
@@ -447,6 +449,29 @@ int main() {
             }
             check(worst < 1e-12, "MIMO kernel (noise-free) equals the recursion with Eigen (" + std::to_string(worst) + ")");
         }
+    }
+
+    {  // Hessenberg LU of zI - H, both solves, against Eigen's dense LU (pivoting exercised: z near H's values).
+        const Eigen::Index n = 9;
+        Eigen::MatrixXd M(n, n);
+        for (Eigen::Index i = 0; i < n; ++i)
+            for (Eigen::Index j = 0; j < n; ++j) M(i, j) = std::sin(1.7 * static_cast<double>(i * n + j) + 0.3);
+        const Eigen::HessenbergDecomposition<Eigen::MatrixXd> hd(M);
+        const Eigen::MatrixXd H = hd.matrixH();
+        double worst = 0.0;
+        for (const std::complex<double> z : {std::complex<double>(0.3, 0.9), std::complex<double>(-1.0, 0.0),
+                                             std::complex<double>(0.01, -0.02)}) {
+            const HessenbergLU lu(H, z);
+            const Eigen::MatrixXcd A = z * Eigen::MatrixXcd::Identity(n, n) - H.cast<std::complex<double>>();
+            Eigen::VectorXcd b(n);
+            for (Eigen::Index i = 0; i < n; ++i) b[i] = std::complex<double>(std::cos(static_cast<double>(i)), 0.5 * static_cast<double>(i));
+            Eigen::VectorXcd x = b, y = b;
+            lu.solve(x.data());
+            lu.solve_transposed(y.data());
+            const Eigen::VectorXcd want_x = A.partialPivLu().solve(b), want_y = A.transpose().partialPivLu().solve(b);
+            worst = std::max({worst, (x - want_x).norm() / want_x.norm(), (y - want_y).norm() / want_y.norm()});
+        }
+        check(worst < 1e-12, "Hessenberg LU solves equal dense LU (" + std::to_string(worst) + ")");
     }
 
     std::printf("%d passed, %d failed\n", passed, failed);

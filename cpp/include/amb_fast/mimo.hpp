@@ -91,6 +91,10 @@ enum class MimoKernel { automatic, portable, avx2 };
 void set_mimo_kernel(MimoKernel kernel);  // avx2 falls back to portable where the processor lacks it
 const char* mimo_kernel_name();           // the kernel automatic picks here: "avx2" or "portable"
 
+// Seed of noise source j of a kind (0: probe, 1: force transducer, 2: transducer lines, 3: the state's
+// line-free part): splitmix64 of the run's seed, the kind and j, so every source has its own stream.
+std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t kind, Eigen::Index j);
+
 // Runs the loop from rest: recorded forces (n x p) and outputs (n x r), sample-major.
 void mimo_simulate(const MimoModel& model, const double* force, Eigen::Index n, std::uint64_t seed, double* recorded,
                    double* out);
@@ -102,33 +106,5 @@ void mimo_simulate(const MimoModel& model, const double* force, Eigen::Index n, 
 void mimo_experiments(const MimoModel& model, const double* const* period_force, Eigen::Index L,
                       Eigen::Index settle_periods, Eigen::Index periods, const std::vector<std::uint64_t>& seeds,
                       bool steady_start, double* const* recorded, double* const* measured, bool all_forces = true);
-
-}  // namespace amb_fast
-
-namespace amb_fast {
-
-// Experiments in lock step (as mimo_experiments, K = seeds.size()), reduced to the line spectra of every
-// recorded period: lines[((period * bins + j) * channels + channel) * K + experiment] = the unscaled
-// DFT of that period of that channel at bins[j] (force: p channels, displacement: q). With
-// steady_start the recorded force is the same every period (to rounding) plus the transducers' white
-// noise, which enters nothing else: its per-period line spectra are drawn directly as independent
-// complex normals of variance L sigma^2 (exact in distribution), from one stream per experiment and
-// channel; from rest the force noise is added sample by sample and every period transformed.
-void mimo_line_experiments(const MimoModel& model, const double* const* period_force, Eigen::Index L,
-                           Eigen::Index settle_periods, Eigen::Index periods, const std::vector<std::uint64_t>& seeds,
-                           bool steady_start, const std::vector<Eigen::Index>& bins, std::complex<double>* force_lines,
-                           std::complex<double>* displacement_lines);
-
-// The 2x2 estimate H = F Y^-1 per line from both experiments' per-period line spectra, laid out as
-// mimo_line_experiments writes them (2 channels, 2 experiments): F, Y the period means, and the
-// variance of H's real and imaginary parts from the linearised dH = (dF - H dY) Y^-1 of every period
-// (sum of squares / (P (P - 1))). Matrices per line, row-major 2x2: [line][i][j].
-struct Estimate2x2 {
-    Eigen::Index lines = 0, periods = 0;
-    std::vector<std::complex<double>> H, receptance, force, displacement;  // force, displacement: [line][channel][experiment]
-    std::vector<double> var_re, var_im;
-};
-Estimate2x2 estimate_2x2(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines,
-                         Eigen::Index periods, Eigen::Index lines);
 
 }  // namespace amb_fast

@@ -207,6 +207,12 @@ def run_experiment(
     (``start="steady"``, no settling needed) or from rest after ``settle_periods`` (default: enough for
     the slowest pole, or transducer pole, to decay below 1e-9). ``seed`` fixes the noise of both
     experiments. Raises :class:`UnstableLoopError` for an unstable loop.
+
+    From the steady state the recorded periods' line spectra are drawn directly rather than simulated
+    sample by sample: the loop is linear, so this is exact in distribution (the same means, variances
+    and correlations across lines, probes and periods; noise-free, the same numbers to rounding), but a
+    seed gives other numbers than :func:`simulate` would. ``start="rest"`` runs the loop sample by
+    sample.
     """
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
     spec = controller_matrix(controller)
@@ -224,8 +230,10 @@ def run_experiment(
     seeds = [s, (s ^ 0xA5A5A5A5DEADBEEF) % 2**64]
     args = _core_args(model, rig, outputs=2)
     harmonics = excitation.harmonics
-    # Per-period line spectra in the core; in the periodic steady state the transducer noise (which enters
-    # nothing else) is drawn there in the frequency domain, exact in distribution.
+    # Per-period line spectra in the core. In the periodic steady state they are drawn directly, exact in
+    # distribution: the loop is linear, so each period's spectrum at a line is the steady response to the
+    # excitation, plus the response to that period's noise spectrum, plus what the change of the state over
+    # the period leaks into the line (docs/model.md); from rest the loop runs sample by sample.
     Fp, Yp = _core.mimo_line_experiments(**args, period_forces=excitation_pair(excitation),
                                          settle_periods=settle_periods, periods=periods, seeds=seeds,
                                          steady_start=start == "steady", bins=harmonics)  # fmt: skip

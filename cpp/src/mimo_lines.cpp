@@ -1,0 +1,404 @@
+#include "amb_fast/mimo_lines.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <stdexcept>
+
+#include "amb_fast/errors.hpp"
+#include "amb_fast/interrupt.hpp"
+#include "amb_fast/random.hpp"
+#include "amb_fast/spectrum.hpp"
+#include "amb_fast/steady.hpp"
+
+namespace amb_fast {
+
+using cd = std::complex<double>;
+
+namespace {
+// 1 / x without the library's scaled division (x is a pivot of a well-conditioned matrix).
+cd reciprocal(cd x) { return std::conj(x) / std::norm(x); }
+}  // namespace
+
+HessenbergLU::HessenbergLU(const Eigen::MatrixXd& H, cd z)
+    : n_(H.rows()),
+      U_(-H.cast<cd>()),
+      inverse_diagonal_(static_cast<std::size_t>(n_)),
+      multiplier_(static_cast<std::size_t>(std::max<Eigen::Index>(n_ - 1, 0))),
+      swapped_(multiplier_.size(), 0) {
+    U_.diagonal().array() += z;
+    for (Eigen::Index j = 0; j < n_; ++j) {
+        if (j + 1 < n_) {
+            if (std::norm(U_(j + 1, j)) > std::norm(U_(j, j))) {
+                U_.row(j).segment(j, n_ - j).swap(U_.row(j + 1).segment(j, n_ - j));
+                swapped_[static_cast<std::size_t>(j)] = 1;
+            }
+        }
+        if (U_(j, j) == 0.0) throw std::invalid_argument("zI - H is singular: z is a pole of the loop");
+        inverse_diagonal_[static_cast<std::size_t>(j)] = reciprocal(U_(j, j));
+        if (j + 1 == n_) break;
+        const cd l = U_(j + 1, j) * inverse_diagonal_[static_cast<std::size_t>(j)];
+        multiplier_[static_cast<std::size_t>(j)] = l;
+        U_.row(j + 1).segment(j + 1, n_ - j - 1) -= l * U_.row(j).segment(j + 1, n_ - j - 1);
+        U_(j + 1, j) = 0.0;
+    }
+}
+
+void HessenbergLU::solve(cd* x) const {
+    for (Eigen::Index j = 0; j + 1 < n_; ++j) {
+        if (swapped_[static_cast<std::size_t>(j)]) std::swap(x[j], x[j + 1]);
+        x[j + 1] -= multiplier_[static_cast<std::size_t>(j)] * x[j];
+    }
+    for (Eigen::Index i = n_ - 1; i >= 0; --i) {
+        cd sum = x[i];
+        for (Eigen::Index c = i + 1; c < n_; ++c) sum -= U_(i, c) * x[c];
+        x[i] = sum * inverse_diagonal_[static_cast<std::size_t>(i)];
+    }
+}
+
+void HessenbergLU::solve_transposed(cd* x) const {
+    for (Eigen::Index i = 0; i < n_; ++i) {  // U^T t = b
+        cd sum = x[i];
+        for (Eigen::Index k = 0; k < i; ++k) sum -= U_(k, i) * x[k];
+        x[i] = sum * inverse_diagonal_[static_cast<std::size_t>(i)];
+    }
+    for (Eigen::Index j = n_ - 2; j >= 0; --j) {  // then the row operations transposed, last first
+        x[j] -= multiplier_[static_cast<std::size_t>(j)] * x[j + 1];
+        if (swapped_[static_cast<std::size_t>(j)]) std::swap(x[j], x[j + 1]);
+    }
+}
+
+namespace {
+constexpr double pi = 3.14159265358979323846;
+
+// Powers of two d with D^-1 M D balanced (each state's row and column of similar size; Parlett and
+// Reinsch, as LAPACK's gebal): exact in floating point, and without it the orthogonal Hessenberg
+// reduction mixes states of very different scales (m, m/s, A) and loses their small digits.
+Eigen::VectorXd balancing(const Eigen::MatrixXd& M) {
+    const Eigen::Index n = M.rows();
+    Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
+    Eigen::MatrixXd B = M;
+    for (bool changed = true; changed;) {
+        changed = false;
+        for (Eigen::Index i = 0; i < n; ++i) {
+            const double c = B.col(i).cwiseAbs().sum() - std::abs(B(i, i)), r = B.row(i).cwiseAbs().sum() - std::abs(B(i, i));
+            if (c == 0.0 || r == 0.0) continue;
+            double f = 1.0;
+            const double total = c + r;
+            double cs = c, rs = r;
+            while (cs < rs / 2.0) cs *= 2.0, rs /= 2.0, f *= 2.0;
+            while (cs >= rs * 2.0) cs /= 2.0, rs *= 2.0, f /= 2.0;
+            if (cs + rs >= 0.95 * total) continue;
+            changed = true;
+            d[i] *= f;
+            B.col(i) *= f;
+            B.row(i) /= f;
+        }
+    }
+    return d;
+}
+
+// The force transducers' white noise added to every period's force lines (the periods' own lines
+// copied from period 0, which holds them on entry): N(0, L sigma^2 / 2) in the real and in the
+// imaginary part, one stream per experiment and channel, line by line, period by period.
+void add_force_line_noise(const MimoModel& model, Eigen::Index L, Eigen::Index periods,
+                          const std::vector<std::uint64_t>& seeds, Eigen::Index B, cd* force_lines) {
+    const Eigen::Index p = model.forces();
+    const auto K = static_cast<Eigen::Index>(seeds.size());
+    std::vector<cd> first(static_cast<std::size_t>(B));
+    for (Eigen::Index l = 0; l < K; ++l)
+        for (Eigen::Index c = 0; c < p; ++c) {
+            const double sigma = std::sqrt(0.5 * static_cast<double>(L)) * model.force_noise[c];
+            NormalStream draws(stream_seed(seeds[static_cast<std::size_t>(l)], 2, c));
+            for (Eigen::Index j = 0; j < B; ++j) first[static_cast<std::size_t>(j)] = force_lines[(j * p + c) * K + l];
+            for (Eigen::Index period = 0; period < periods; ++period)
+                for (Eigen::Index j = 0; j < B; ++j) {
+                    cd value = first[static_cast<std::size_t>(j)];
+                    if (sigma > 0.0) {
+                        const double re = draws(), im = draws();
+                        value += cd(sigma * re, sigma * im);
+                    }
+                    force_lines[((period * B + j) * p + c) * K + l] = value;
+                }
+        }
+}
+
+// From rest: the loop sample by sample, every recorded period transformed.
+void lines_from_rest(const MimoModel& model, const double* const* period_force, Eigen::Index L,
+                     Eigen::Index settle_periods, Eigen::Index periods, const std::vector<std::uint64_t>& seeds,
+                     const std::vector<Eigen::Index>& bins, cd* force_lines, cd* displacement_lines) {
+    const auto K = static_cast<Eigen::Index>(seeds.size());
+    const Eigen::Index p = model.forces(), q = model.probes(), r = model.outputs();
+    const auto B = static_cast<Eigen::Index>(bins.size());
+    MimoLoop loop(model, seeds);
+    LineTransform transform(L, bins, LineTransform::Method::fft);
+    std::vector<Eigen::MatrixXd> rec(static_cast<std::size_t>(K), Eigen::MatrixXd(p, L)),
+        out(static_cast<std::size_t>(K), Eigen::MatrixXd(r, L));  // column k = sample k
+    std::vector<double*> rec_ptr, out_ptr;
+    for (Eigen::Index l = 0; l < K; ++l) {
+        rec_ptr.push_back(rec[static_cast<std::size_t>(l)].data());
+        out_ptr.push_back(out[static_cast<std::size_t>(l)].data());
+    }
+    Eigen::VectorXd row(L), row2(L);
+    std::vector<cd> spectrum(static_cast<std::size_t>(B)), spectrum2(spectrum.size());
+    // lines[((period * B + j) * channels + channel) * K + l] = spectrum[j]
+    auto put = [&](cd* lines, Eigen::Index period, Eigen::Index channels, Eigen::Index channel, Eigen::Index l) {
+        for (Eigen::Index j = 0; j < B; ++j)
+            lines[((period * B + j) * channels + channel) * K + l] = spectrum[static_cast<std::size_t>(j)];
+    };
+    for (Eigen::Index k = 0; k < settle_periods + periods; ++k) {
+        loop.run(period_force, L, rec_ptr.data(), out_ptr.data());
+        if (k < settle_periods) continue;
+        const Eigen::Index period = k - settle_periods;
+        for (Eigen::Index l = 0; l < K; ++l) {
+            Eigen::Index c = 0;
+            for (; c + 2 <= q; c += 2) {  // two probes at once: the same digits, side by side in SIMD lanes
+                row = out[static_cast<std::size_t>(l)].row(c).transpose();
+                row2 = out[static_cast<std::size_t>(l)].row(c + 1).transpose();
+                transform(row.data(), row2.data(), spectrum.data(), spectrum2.data());
+                put(displacement_lines, period, q, c, l);
+                spectrum.swap(spectrum2);
+                put(displacement_lines, period, q, c + 1, l);
+            }
+            for (; c < q; ++c) {
+                row = out[static_cast<std::size_t>(l)].row(c).transpose();
+                transform(row.data(), spectrum.data());
+                put(displacement_lines, period, q, c, l);
+            }
+            for (c = 0; c < p; ++c) {
+                row = rec[static_cast<std::size_t>(l)].row(c).transpose();
+                transform(row.data(), spectrum.data());
+                put(force_lines, period, p, c, l);
+            }
+        }
+    }
+}
+
+// The steady-state line spectra drawn directly (mimo_lines.hpp). Per line, with z = e^{jw} and M = T H T^-1
+// (H upper Hessenberg): what the forces and the probe noise give at the probes (Gf, Gn), what the
+// noise's spectrum gives the state at the period's end (through Xn), and what a state change over the
+// period gives at the probes (CRz). The noise's state is carried from period to period.
+void steady_lines(const MimoModel& model, const double* const* period_force, Eigen::Index L, Eigen::Index periods,
+                  const std::vector<std::uint64_t>& seeds, const std::vector<Eigen::Index>& bins, cd* force_lines,
+                  cd* displacement_lines) {
+    const auto K = static_cast<Eigen::Index>(seeds.size());
+    const Eigen::Index n = model.states(), p = model.forces(), q = model.probes();
+    const auto B = static_cast<Eigen::Index>(bins.size());
+    for (const Eigen::Index bin : bins)
+        require(bin > 0 && 2 * bin < L, "bin", bin, "strictly between 0 and half the period (steady start)");
+    // M = T H T^-1 with T = D Q: D balances, Q is the orthogonal Hessenberg reduction of D^-1 M D.
+    const Eigen::VectorXd scale = balancing(model.M);
+    const Eigen::MatrixXd balanced = scale.cwiseInverse().asDiagonal() * model.M * scale.asDiagonal();
+    const Eigen::HessenbergDecomposition<Eigen::MatrixXd> hessenberg(balanced);
+    const Eigen::MatrixXd H = hessenberg.matrixH(), Q = hessenberg.matrixQ();
+    const Eigen::MatrixXd T = scale.asDiagonal() * Q, T_inverse = Q.transpose() * scale.cwiseInverse().asDiagonal();
+    Eigen::MatrixXd inputs(n, p + q);
+    inputs << model.Bf, model.Bn;
+    const Eigen::MatrixXcd Bt = (T_inverse * inputs).cast<cd>();
+    const Eigen::MatrixXcd Ct = (model.C.topRows(q) * T).cast<cd>();
+    const Eigen::MatrixXcd Dn = model.Dn.topRows(q).cast<cd>();
+    const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
+    Eigen::MatrixXd ML = I, square = model.M;  // M^L by repeated squaring
+    for (Eigen::Index k = L; k > 0; k >>= 1) {
+        if (k & 1) ML = ML * square;
+        square = square * square;
+    }
+    const Eigen::MatrixXd W = (I - ML) * T;  // the state change over a period, from Hessenberg coordinates
+    // Per line k: Xn = (zI - H)^-1 T^-1 Bn in columns q k on (the state's response to the probe noise, in
+    // Hessenberg coordinates), and the rows q k on of z C (zI - M)^-1 T = z Ct (zI - H)^-1 (by transposed
+    // solves), real and imaginary parts apart; from these G = Ct (zI - H)^-1 T^-1 [Bf Bn], the probes'
+    // response to the forces (p columns) and to the noise (q) per line.
+    const Eigen::Index m = p + q;
+    Eigen::MatrixXcd X(n, B * q), G(q, B * m), CR(q, n);
+    Eigen::MatrixXd CRz_re(B * q, n), CRz_im(B * q, n);
+    std::vector<cd> z(static_cast<std::size_t>(B));
+    for (Eigen::Index k = 0; k < B; ++k) {
+        poll_interrupt();
+        const cd zk = std::polar(1.0, 2.0 * pi * static_cast<double>(bins[static_cast<std::size_t>(k)]) /
+                                          static_cast<double>(L));
+        z[static_cast<std::size_t>(k)] = zk;
+        const HessenbergLU lu(H, zk);
+        X.middleCols(k * q, q) = Bt.rightCols(q);
+        for (Eigen::Index j = 0; j < q; ++j) lu.solve(X.col(k * q + j).data());
+        CR = Ct;
+        for (Eigen::Index i = 0; i < q; ++i) {
+            Eigen::VectorXcd row = CR.row(i).transpose();
+            lu.solve_transposed(row.data());
+            CR.row(i) = row.transpose();
+        }
+        G.middleCols(k * m, m).noalias() = CR * Bt;
+        CRz_re.middleRows(k * q, q) = (zk * CR).real();
+        CRz_im.middleRows(k * q, q) = (zk * CR).imag();
+    }
+    // Re(Xn V) as one real product: Xn's columns as (Re, -Im) pairs against V's (Re, Im) pairs.
+    Eigen::MatrixXd Xn(n, 2 * B * q);
+    for (Eigen::Index k = 0; k < B; ++k)
+        for (Eigen::Index j = 0; j < q; ++j) {
+            Xn.col(2 * (k * q + j)) = X.col(k * q + j).real();
+            Xn.col(2 * (k * q + j) + 1) = -X.col(k * q + j).imag();
+        }
+    // The noise's state: stationary covariance P; over a period w = zL - M^L z0 has covariance
+    // P - M^L P M^LT, of which the lines' spectra explain (2 / L) sum sigma^2 Re(S S^H), S = W Xn.
+    Eigen::MatrixXd P = Eigen::MatrixXd::Zero(n, n);
+    std::vector<Eigen::MatrixXd> roots;
+    Eigen::MatrixXd A(n, 2 * B * q);
+    for (Eigen::Index j = 0; j < q; ++j) {
+        const double sigma = model.sensor_noise[j];
+        if (sigma > 0.0) {
+            roots.push_back(stationary_noise_root(model.M, model.Bn.col(j), sigma));
+            P += roots.back() * roots.back().transpose();
+        }
+        const double scale_j = sigma * std::sqrt(2.0 / static_cast<double>(L));
+        for (Eigen::Index k = 0; k < B; ++k) {
+            A.col(2 * (k * q + j)) = scale_j * Xn.col(2 * (k * q + j));
+            A.col(2 * (k * q + j) + 1) = scale_j * Xn.col(2 * (k * q + j) + 1);
+        }
+    }
+    Eigen::MatrixXd residual = P - ML * P * ML.transpose() - W * (A * A.transpose()) * W.transpose();
+    residual = 0.5 * (residual + residual.transpose()).eval();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(residual);
+    const Eigen::MatrixXd residual_root = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+    const Eigen::MatrixXd WL = (2.0 / static_cast<double>(L)) * W;
+    LineTransform transform(L, bins, LineTransform::Method::automatic);
+    Eigen::VectorXd channel(L), draws(n), z0(n), zL(n), d(n), v(2 * B * q), change_re(B * q), change_im(B * q);
+    std::vector<cd> spectrum(static_cast<std::size_t>(B));
+    Eigen::MatrixXcd F(B, p);
+    Eigen::VectorXcd det(B * q);
+    for (Eigen::Index l = 0; l < K; ++l) {
+        const std::uint64_t seed = seeds[static_cast<std::size_t>(l)];
+        // The forces' lines, the probes' periodic response to them, the recorded (transduced) force lines.
+        for (Eigen::Index c = 0; c < p; ++c) {
+            for (Eigen::Index k = 0; k < L; ++k) channel[k] = period_force[l][k * p + c];
+            transform(channel.data(), spectrum.data());
+            const double a = model.transducer_pole[c];
+            for (Eigen::Index k = 0; k < B; ++k) {
+                const cd zk = z[static_cast<std::size_t>(k)];
+                F(k, c) = spectrum[static_cast<std::size_t>(k)];
+                force_lines[(k * p + c) * K + l] = a > 0.0 ? F(k, c) * (zk - 1.0) / (zk - a) : F(k, c);
+            }
+        }
+        for (Eigen::Index k = 0; k < B; ++k)
+            det.segment(k * q, q) = G.middleCols(k * m, p) * F.row(k).transpose();
+        // The noise: the state starts in its stationary distribution, then period by period.
+        NormalStream start(start_noise_seed(seed)), rest(stream_seed(seed, 3, 0));
+        std::vector<NormalStream> probe;
+        for (Eigen::Index j = 0; j < q; ++j) probe.emplace_back(stream_seed(seed, 0, j));
+        z0.setZero();
+        for (const auto& root : roots) {
+            start.fill(draws.data(), n, 1.0);
+            z0 += root * draws;
+        }
+        for (Eigen::Index period = 0; period < periods; ++period) {
+            poll_interrupt();
+            for (Eigen::Index j = 0; j < q; ++j) {  // V: (Re, Im) per line and probe
+                const double sigma = std::sqrt(0.5 * static_cast<double>(L)) * model.sensor_noise[j];
+                for (Eigen::Index k = 0; k < B; ++k) {
+                    double re = 0.0, im = 0.0;
+                    if (sigma > 0.0) re = probe[static_cast<std::size_t>(j)](), im = probe[static_cast<std::size_t>(j)]();
+                    v[2 * (k * q + j)] = sigma * re;
+                    v[2 * (k * q + j) + 1] = sigma * im;
+                }
+            }
+            rest.fill(draws.data(), n, 1.0);
+            zL.noalias() = ML * z0;
+            zL.noalias() += WL * (Xn * v);
+            zL.noalias() += residual_root * draws;
+            d.noalias() = T_inverse * (zL - z0);
+            change_re.noalias() = CRz_re * d;
+            change_im.noalias() = CRz_im * d;
+            for (Eigen::Index k = 0; k < B; ++k)
+                for (Eigen::Index i = 0; i < q; ++i) {
+                    cd y = det[k * q + i] - cd(change_re[k * q + i], change_im[k * q + i]);
+                    for (Eigen::Index j = 0; j < q; ++j)
+                        y += (G(i, k * m + p + j) + Dn(i, j)) * cd(v[2 * (k * q + j)], v[2 * (k * q + j) + 1]);
+                    if (!std::isfinite(y.real()) || !std::isfinite(y.imag()))
+                        throw std::overflow_error("the line spectra became non-finite: the loop is unstable");
+                    displacement_lines[((period * B + k) * q + i) * K + l] = y;
+                }
+            z0 = zL;
+        }
+    }
+}
+}  // namespace
+
+void mimo_line_experiments(const MimoModel& model, const double* const* period_force, Eigen::Index L,
+                           Eigen::Index settle_periods, Eigen::Index periods, const std::vector<std::uint64_t>& seeds,
+                           bool steady_start, const std::vector<Eigen::Index>& bins, cd* force_lines,
+                           cd* displacement_lines) {
+    require(L > 0, "period", L, "> 0 samples");
+    require(settle_periods >= 0, "settle_periods", settle_periods, ">= 0");
+    require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
+    const auto K = static_cast<Eigen::Index>(seeds.size());
+    for (Eigen::Index l = 0; l < K; ++l) require_finite_samples("excitation", period_force[l], L * model.forces());
+    if (!steady_start) {
+        lines_from_rest(validated(model), period_force, L, settle_periods, periods, seeds, bins, force_lines,
+                        displacement_lines);
+        return;
+    }
+    steady_lines(validated(model), period_force, L, periods, seeds, bins, force_lines, displacement_lines);
+    add_force_line_noise(model, L, periods, seeds, static_cast<Eigen::Index>(bins.size()), force_lines);
+}
+
+Estimate2x2 estimate_2x2(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines,
+                         Eigen::Index periods, Eigen::Index lines) {
+    using cd = std::complex<double>;
+    using M2 = Eigen::Matrix2cd;
+    require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
+    Estimate2x2 est;
+    est.lines = lines;
+    est.periods = periods;
+    const auto n = static_cast<std::size_t>(4 * lines);
+    est.H.resize(n);
+    est.receptance.resize(n);
+    est.force.resize(n);
+    est.displacement.resize(n);
+    est.var_re.resize(n);
+    est.var_im.resize(n);
+    // [period][line][channel][experiment]: one 2x2 matrix (row: channel, column: experiment), row-major.
+    auto matrix = [&](const cd* lines_of, Eigen::Index period, Eigen::Index j) {
+        const cd* x = lines_of + (period * lines + j) * 4;
+        M2 A;
+        A << x[0], x[1], x[2], x[3];
+        return A;
+    };
+    auto store = [](std::vector<cd>& to, Eigen::Index j, const M2& A) {
+        for (int i = 0; i < 2; ++i)
+            for (int c = 0; c < 2; ++c) to[static_cast<std::size_t>(4 * j + 2 * i + c)] = A(i, c);
+    };
+    auto inverse = [](const M2& A) {
+        const cd det = A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0);
+        M2 inv;
+        inv << A(1, 1) / det, -A(0, 1) / det, -A(1, 0) / det, A(0, 0) / det;
+        return inv;
+    };
+    const double scale = 1.0 / static_cast<double>(periods * (periods - 1));
+    for (Eigen::Index j = 0; j < lines; ++j) {
+        M2 F = M2::Zero(), Y = M2::Zero();
+        for (Eigen::Index period = 0; period < periods; ++period) {
+            F += matrix(force_lines, period, j);
+            Y += matrix(displacement_lines, period, j);
+        }
+        F /= static_cast<double>(periods);
+        Y /= static_cast<double>(periods);
+        if (!F.allFinite() || !Y.allFinite()) throw std::invalid_argument("force and displacement must be finite");
+        const M2 Yinv = inverse(Y);
+        const M2 H = F * Yinv;
+        Eigen::Matrix2d re = Eigen::Matrix2d::Zero(), im = Eigen::Matrix2d::Zero();
+        for (Eigen::Index period = 0; period < periods; ++period) {
+            const M2 dH = ((matrix(force_lines, period, j) - F) - H * (matrix(displacement_lines, period, j) - Y)) * Yinv;
+            re += dH.real().cwiseAbs2();
+            im += dH.imag().cwiseAbs2();
+        }
+        store(est.H, j, H);
+        store(est.receptance, j, inverse(H));
+        store(est.force, j, F);
+        store(est.displacement, j, Y);
+        for (int i = 0; i < 2; ++i)
+            for (int c = 0; c < 2; ++c) {
+                est.var_re[static_cast<std::size_t>(4 * j + 2 * i + c)] = re(i, c) * scale;
+                est.var_im[static_cast<std::size_t>(4 * j + 2 * i + c)] = im(i, c) * scale;
+            }
+    }
+    return est;
+}
+
+}  // namespace amb_fast
