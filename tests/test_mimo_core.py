@@ -155,3 +155,15 @@ def test_steady_line_spectra_have_the_statistics_of_the_time_domain_loop() -> No
         for part in (np.real, np.imag):
             z = np.abs(part(mean_a) - part(mean_b)) / np.sqrt(part(se_a) ** 2 + part(se_b) ** 2 + 1e-30 * scale**2)
             assert np.max(z) < 4.5, (name, np.max(z))
+
+
+@pytest.mark.parametrize("window", [1, 3, 5, 7])
+def test_median_across_lines_equals_numpy(rng, window: int) -> None:
+    """The two-axis estimate's running median (the core's, per entry) against numpy's sliding window."""
+    from amb_fast.two_axis._experiment import _median
+
+    x = np.round(rng.normal(size=(23, 2, 2)), 1)  # rounded: ties
+    half = window // 2
+    padded = np.concatenate([np.repeat(x[:1], half, axis=0), x, np.repeat(x[-1:], half, axis=0)])
+    want = np.median(np.lib.stride_tricks.sliding_window_view(padded, window, axis=0), axis=-1)
+    np.testing.assert_array_equal(_median(x, window), want)

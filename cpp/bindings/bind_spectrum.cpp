@@ -35,6 +35,23 @@ void bind_spectrum(py::module_& m) {
         .def_readonly("saturated_samples", &LineEstimate::saturated_samples);
 
     m.def(
+        "median_filter",
+        [](const InputArray& x, int window) {
+            if (x.ndim() != 2) throw std::invalid_argument("x must be 2-D: (lines, columns)");
+            if (window < 1 || window % 2 == 0)
+                throw std::invalid_argument("window must be an odd number >= 1, got " + std::to_string(window));
+            const auto n = static_cast<Eigen::Index>(x.shape(0)), columns = static_cast<Eigen::Index>(x.shape(1));
+            py::array_t<double> out({n, columns});
+            const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> in(x.data(), n,
+                                                                                                           columns);
+            Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> to(out.mutable_data(), n,
+                                                                                                 columns);
+            for (Eigen::Index c = 0; c < columns; ++c) to.col(c) = median_filter(in.col(c), window);
+            return out;
+        },
+        py::arg("x"), py::arg("window"),
+        "Running median of each column across the rows (odd window; the ends repeat the edge value).");
+    m.def(
         "line_spectrum",
         [](const InputArray& x, const std::vector<Eigen::Index>& bins, const std::string& method) -> py::tuple {
             if (x.ndim() != 1 && x.ndim() != 2) throw std::invalid_argument("x must be one period or rows of periods");

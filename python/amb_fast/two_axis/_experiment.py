@@ -172,15 +172,15 @@ def estimate2(
 
 def _median(x: np.ndarray, window: int) -> np.ndarray:
     """Running median across the lines (axis 0) per entry; the ends repeat the edge value."""
-    half = window // 2
-    padded = np.concatenate([np.repeat(x[:1], half, axis=0), x, np.repeat(x[-1:], half, axis=0)])
-    view = np.lib.stride_tricks.sliding_window_view(padded, window, axis=0)
-    return np.partition(view, half, axis=-1)[..., half]
+    return _core.median_filter(x.reshape(x.shape[0], -1), window).reshape(x.shape)
 
 
 def excitation_pair(excitation: Multisine) -> np.ndarray:
     """The two experiments' forces, (2, period, 2): x = +s, +s and y = +s, -s."""
-    return np.ascontiguousarray(SIGNS[:, None, :] * excitation.samples[None, :, None])
+    pair = np.empty((2, excitation.samples.size, 2))
+    for experiment, axis in np.ndindex(2, 2):  # a broadcast product over an axis of 2 takes ten times as long
+        np.multiply(SIGNS[experiment, axis], excitation.samples, out=pair[experiment, :, axis])
+    return pair
 
 
 def _window(median_window: int) -> int:
