@@ -2,9 +2,10 @@
 
 From the steady state the two-axis experiment draws its periods' line spectra directly (exact in
 distribution, docs/model.md "Two axes"), where the one-axis experiment runs its loop sample by sample;
-its cost does not depend on the coupling, which a coupled row (a seal-like process, misaligned probes,
-cross feedback) shows beside the paper's uncoupled rig. Times are medians of repeated calls, in CPU time of this process (the 2-core machine is shared, so wall
-time mostly measures the neighbours) and in wall time; the target is a ratio <= 2.5.
+the coupling changes its cost only through the loop's size, as a coupled row (a seal-like process,
+misaligned probes, cross feedback: 16 states against 14) shows beside the paper's uncoupled rig. Times
+are medians of repeated calls, in CPU time of this process (the 2-core machine is shared, so wall time
+mostly measures the neighbours) and in wall time; the target is a ratio <= 2.5.
 
 Both calls are warmed up first, then the process rests for half a second: the first call of each
 builds and caches its model with numpy/scipy linear algebra, after which OpenBLAS's worker threads
