@@ -174,9 +174,10 @@ void lines_from_rest(const MimoModel& model, const double* const* period_force, 
 }
 
 // The steady-state line spectra drawn directly (mimo_lines.hpp). Per line, with z = e^{jw} and M = T H T^-1
-// (H upper Hessenberg): what the forces and the probe noise give at the probes (Gf, Gn), what the
-// noise's spectrum gives the state at the period's end (through Xn), and what a state change over the
-// period gives at the probes (CRz). The noise's state is carried from period to period.
+// (H upper Hessenberg): what the forces and the probe noise give at the probes (G), what the noise's
+// spectrum gives the state at the period's end (through Xn), and what a state change over the period
+// gives at the probes (CRz). The noise's state is carried from period to period. An unstable loop
+// makes M^L or the stationary covariance overflow, and the spectra non-finite: refused.
 void steady_lines(const MimoModel& model, const double* const* period_force, Eigen::Index L, Eigen::Index periods,
                   const std::vector<std::uint64_t>& seeds, const std::vector<Eigen::Index>& bins, cd* force_lines,
                   cd* displacement_lines) {
