@@ -167,3 +167,16 @@ def test_median_across_lines_equals_numpy(rng, window: int) -> None:
     padded = np.concatenate([np.repeat(x[:1], half, axis=0), x, np.repeat(x[-1:], half, axis=0)])
     want = np.median(np.lib.stride_tricks.sliding_window_view(padded, window, axis=0), axis=-1)
     np.testing.assert_array_equal(_median(x, window), want)
+
+
+def test_drawn_spectra_refuse_an_unstable_loop() -> None:
+    """The steady-state draw has no loop to blow up: an unstable M overflows M^L or the stationary
+    covariance instead, and the core raises rather than return numbers."""
+    rig = ta.TwoAxisRig.paper()
+    sphs = af.schroeder_multisine(f0=20.0, f_max=400.0)
+    args = _core_args(loop_model(rig, PID), rig, outputs=2)
+    args["M"] = 1.02 * args["M"]
+    assert np.max(np.abs(np.linalg.eigvals(args["M"]))) > 1.01
+    with pytest.raises(OverflowError, match="unstable"):
+        _core.mimo_line_experiments(**args, period_forces=excitation_pair(sphs), settle_periods=0, periods=3,
+                                    seeds=[1, 2], steady_start=True, bins=sphs.harmonics)  # fmt: skip
