@@ -11,7 +11,6 @@
 
 #include "amb_fast/errors.hpp"
 #include "amb_fast/interrupt.hpp"
-#include "amb_fast/spectrum.hpp"
 #include "amb_fast/steady.hpp"
 
 namespace amb_fast {
@@ -364,7 +363,7 @@ void MimoLoop::run_block(const double* const* force, Eigen::Index start, Eigen::
 }
 
 void MimoLoop::start_periodic(const double* const* period_force, Eigen::Index L) {
-    const Eigen::Index ns = model_.states(), p = model_.forces(), q = model_.probes(), r = model_.outputs();
+    const Eigen::Index ns = model_.states(), p = model_.forces(), r = model_.outputs();
     MimoModel quiet = model_;
     quiet.sensor_noise.setZero();
     quiet.force_noise.setZero();
@@ -377,30 +376,34 @@ void MimoLoop::start_periodic(const double* const* period_force, Eigen::Index L)
         out_ptr.push_back(out[l].data());
     }
     probe.run(period_force, L, rec_ptr.data(), out_ptr.data());
-    // M^L once for every lane (periodic_start squares it; the solve is cheap beside it).
-    Eigen::MatrixXd power = Eigen::MatrixXd::Identity(ns, ns), square = model_.M;
-    for (Eigen::Index k = L; k > 0; k >>= 1) {
-        if (k & 1) power = power * square;
-        square = square * square;
-    }
-    const auto lu = (Eigen::MatrixXd::Identity(ns, ns) - power).partialPivLu();
-    std::vector<Eigen::MatrixXd> roots;
-    for (Eigen::Index j = 0; j < q; ++j)
-        if (model_.sensor_noise[j] > 0.0)
-            roots.push_back(stationary_noise_root(model_.M, model_.Bn.col(j), model_.sensor_noise[j]));
+    // M^L once for every lane (the solve is cheap beside it).
+    const auto lu = (Eigen::MatrixXd::Identity(ns, ns) - matrix_power(model_.M, L)).partialPivLu();
+    const std::vector<Eigen::MatrixXd> roots = probe_noise_roots(model_);
     for (Eigen::Index l = 0; l < lanes_; ++l) {
         Eigen::VectorXd z = lu.solve(probe.state(l));
-        NormalStream draws(start_noise_seed(seeds_[l]));
-        Eigen::VectorXd v(ns);
-        for (const auto& root : roots) {
-            draws.fill(v.data(), ns, 1.0);
-            z += root * v;
-        }
+        add_stationary_noise(roots, seeds_[l], z);
         for (Eigen::Index i = 0; i < ns; ++i) set_state(i, l, z[i]);
         for (Eigen::Index j = 0; j < p; ++j) {
             const double a = model_.transducer_pole[j];
             q_(j, l) = a > 0.0 ? periodic_transducer_start(a, L, probe.q_(j, l)) : 0.0;
         }
+    }
+}
+
+std::vector<Eigen::MatrixXd> probe_noise_roots(const MimoModel& model) {
+    std::vector<Eigen::MatrixXd> roots;
+    for (Eigen::Index j = 0; j < model.probes(); ++j)
+        if (model.sensor_noise[j] > 0.0)
+            roots.push_back(stationary_noise_root(model.M, model.Bn.col(j), model.sensor_noise[j]));
+    return roots;
+}
+
+void add_stationary_noise(const std::vector<Eigen::MatrixXd>& roots, std::uint64_t seed, Eigen::VectorXd& z) {
+    NormalStream draws(start_noise_seed(seed));
+    Eigen::VectorXd v(z.size());
+    for (const auto& root : roots) {
+        draws.fill(v.data(), z.size(), 1.0);
+        z += root * v;
     }
 }
 

@@ -197,20 +197,17 @@ void steady_lines(const MimoModel& model, const double* const* period_force, Eig
     const Eigen::MatrixXcd Bt = (T_inverse * inputs).cast<cd>();
     const Eigen::MatrixXcd Ct = (model.C.topRows(q) * T).cast<cd>();
     const Eigen::MatrixXcd Dn = model.Dn.topRows(q).cast<cd>();
-    const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
-    Eigen::MatrixXd ML = I, square = model.M;  // M^L by repeated squaring
-    for (Eigen::Index k = L; k > 0; k >>= 1) {
-        if (k & 1) ML = ML * square;
-        square = square * square;
-    }
+    const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n), ML = matrix_power(model.M, L);
     const Eigen::MatrixXd W = (I - ML) * T;  // the state change over a period, from Hessenberg coordinates
-    // Per line k: Xn = (zI - H)^-1 T^-1 Bn in columns q k on (the state's response to the probe noise, in
-    // Hessenberg coordinates), and the rows q k on of z C (zI - M)^-1 T = z Ct (zI - H)^-1 (by transposed
-    // solves), real and imaginary parts apart; from these G = Ct (zI - H)^-1 T^-1 [Bf Bn], the probes'
-    // response to the forces (p columns) and to the noise (q) per line.
+    // Per line k: G = Ct (zI - H)^-1 T^-1 [Bf Bn] + [0 Dn], the probes' response to the forces (p columns)
+    // and to the noise (q), from the rows of C (zI - M)^-1 T = Ct (zI - H)^-1 (transposed solves); kept
+    // times z, real and imaginary parts apart (CRz), for the state's change over a period. And
+    // Xn = (zI - H)^-1 T^-1 Bn, the state's response to the noise (Hessenberg coordinates), as real
+    // columns (Re, -Im) per probe, so that Re(Xn V) is one real product with V as (Re, Im) pairs.
     const Eigen::Index m = p + q;
-    Eigen::MatrixXcd X(n, B * q), G(q, B * m), CR(q, n);
-    Eigen::MatrixXd CRz_re(B * q, n), CRz_im(B * q, n);
+    Eigen::MatrixXcd G(q, B * m), CR(q, n);
+    Eigen::MatrixXd CRz_re(B * q, n), CRz_im(B * q, n), Xn(n, 2 * B * q);
+    Eigen::VectorXcd x(n);
     std::vector<cd> z(static_cast<std::size_t>(B));
     for (Eigen::Index k = 0; k < B; ++k) {
         poll_interrupt();
@@ -218,43 +215,34 @@ void steady_lines(const MimoModel& model, const double* const* period_force, Eig
                                           static_cast<double>(L));
         z[static_cast<std::size_t>(k)] = zk;
         const HessenbergLU lu(H, zk);
-        X.middleCols(k * q, q) = Bt.rightCols(q);
-        for (Eigen::Index j = 0; j < q; ++j) lu.solve(X.col(k * q + j).data());
-        CR = Ct;
+        for (Eigen::Index j = 0; j < q; ++j) {
+            x = Bt.col(p + j);
+            lu.solve(x.data());
+            Xn.col(2 * (k * q + j)) = x.real();
+            Xn.col(2 * (k * q + j) + 1) = -x.imag();
+        }
         for (Eigen::Index i = 0; i < q; ++i) {
-            Eigen::VectorXcd row = CR.row(i).transpose();
-            lu.solve_transposed(row.data());
-            CR.row(i) = row.transpose();
+            x = Ct.row(i).transpose();
+            lu.solve_transposed(x.data());
+            CR.row(i) = x.transpose();
         }
         G.middleCols(k * m, m).noalias() = CR * Bt;
+        G.middleCols(k * m + p, q) += Dn;
         CRz_re.middleRows(k * q, q) = (zk * CR).real();
         CRz_im.middleRows(k * q, q) = (zk * CR).imag();
     }
-    // Re(Xn V) as one real product: Xn's columns as (Re, -Im) pairs against V's (Re, Im) pairs.
-    Eigen::MatrixXd Xn(n, 2 * B * q);
-    for (Eigen::Index k = 0; k < B; ++k)
-        for (Eigen::Index j = 0; j < q; ++j) {
-            Xn.col(2 * (k * q + j)) = X.col(k * q + j).real();
-            Xn.col(2 * (k * q + j) + 1) = -X.col(k * q + j).imag();
-        }
     // The noise's state: stationary covariance P; over a period w = zL - M^L z0 has covariance
     // P - M^L P M^LT, of which the lines' spectra explain (2 / L) sum sigma^2 Re(S S^H), S = W Xn.
+    const std::vector<Eigen::MatrixXd> roots = probe_noise_roots(model);
     Eigen::MatrixXd P = Eigen::MatrixXd::Zero(n, n);
-    std::vector<Eigen::MatrixXd> roots;
-    Eigen::MatrixXd A(n, 2 * B * q);
-    for (Eigen::Index j = 0; j < q; ++j) {
-        const double sigma = model.sensor_noise[j];
-        if (sigma > 0.0) {
-            roots.push_back(stationary_noise_root(model.M, model.Bn.col(j), sigma));
-            P += roots.back() * roots.back().transpose();
-        }
-        const double scale_j = sigma * std::sqrt(2.0 / static_cast<double>(L));
-        for (Eigen::Index k = 0; k < B; ++k) {
-            A.col(2 * (k * q + j)) = scale_j * Xn.col(2 * (k * q + j));
-            A.col(2 * (k * q + j) + 1) = scale_j * Xn.col(2 * (k * q + j) + 1);
-        }
-    }
-    Eigen::MatrixXd residual = P - ML * P * ML.transpose() - W * (A * A.transpose()) * W.transpose();
+    for (const auto& root : roots) P += root * root.transpose();
+    Eigen::VectorXd explained(2 * B * q);  // per column of Xn: (2 / L) sigma^2 of its probe
+    for (Eigen::Index k = 0; k < B; ++k)
+        for (Eigen::Index j = 0; j < q; ++j)
+            explained.segment(2 * (k * q + j), 2).setConstant(2.0 / static_cast<double>(L) *
+                                                              model.sensor_noise[j] * model.sensor_noise[j]);
+    Eigen::MatrixXd residual =
+        P - ML * P * ML.transpose() - W * (Xn * explained.asDiagonal() * Xn.transpose()) * W.transpose();
     residual = 0.5 * (residual + residual.transpose()).eval();
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(residual);
     const Eigen::MatrixXd residual_root = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
@@ -280,14 +268,11 @@ void steady_lines(const MimoModel& model, const double* const* period_force, Eig
         for (Eigen::Index k = 0; k < B; ++k)
             det.segment(k * q, q) = G.middleCols(k * m, p) * F.row(k).transpose();
         // The noise: the state starts in its stationary distribution, then period by period.
-        NormalStream start(start_noise_seed(seed)), rest(stream_seed(seed, 3, 0));
+        NormalStream rest(stream_seed(seed, 3, 0));
         std::vector<NormalStream> probe;
         for (Eigen::Index j = 0; j < q; ++j) probe.emplace_back(stream_seed(seed, 0, j));
         z0.setZero();
-        for (const auto& root : roots) {
-            start.fill(draws.data(), n, 1.0);
-            z0 += root * draws;
-        }
+        add_stationary_noise(roots, seed, z0);
         for (Eigen::Index period = 0; period < periods; ++period) {
             poll_interrupt();
             for (Eigen::Index j = 0; j < q; ++j) {  // V: (Re, Im) per line and probe
@@ -310,7 +295,7 @@ void steady_lines(const MimoModel& model, const double* const* period_force, Eig
                 for (Eigen::Index i = 0; i < q; ++i) {
                     cd y = det[k * q + i] - cd(change_re[k * q + i], change_im[k * q + i]);
                     for (Eigen::Index j = 0; j < q; ++j)
-                        y += (G(i, k * m + p + j) + Dn(i, j)) * cd(v[2 * (k * q + j)], v[2 * (k * q + j) + 1]);
+                        y += G(i, k * m + p + j) * cd(v[2 * (k * q + j)], v[2 * (k * q + j) + 1]);
                     if (!std::isfinite(y.real()) || !std::isfinite(y.imag()))
                         throw std::overflow_error("the line spectra became non-finite: the loop is unstable");
                     displacement_lines[((period * B + k) * q + i) * K + l] = y;

@@ -38,14 +38,18 @@ ClosedLoopMap::ClosedLoopMap(const SampleMap& P, int sensed, const Controller& c
     }
 }
 
-Eigen::VectorXd periodic_start(const Eigen::MatrixXd& M, Eigen::Index N, const Eigen::VectorXd& zN) {
+Eigen::MatrixXd matrix_power(const Eigen::MatrixXd& M, Eigen::Index N) {
     Eigen::MatrixXd power = Eigen::MatrixXd::Identity(M.rows(), M.cols()), square = M;
     for (Eigen::Index k = N; k > 0; k >>= 1) {
         if (k & 1) power = power * square;
         square = square * square;
     }
+    return power;
+}
+
+Eigen::VectorXd periodic_start(const Eigen::MatrixXd& M, Eigen::Index N, const Eigen::VectorXd& zN) {
     const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(M.rows(), M.cols());
-    return (I - power).partialPivLu().solve(zN);
+    return (I - matrix_power(M, N)).partialPivLu().solve(zN);
 }
 
 Eigen::MatrixXd stationary_noise_root(const Eigen::MatrixXd& M, const Eigen::VectorXd& g, double sigma) {

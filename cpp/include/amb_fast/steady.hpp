@@ -23,6 +23,9 @@ struct ClosedLoopMap {
     Eigen::VectorXd noise_in;
 };
 
+// M^N by repeated squaring (log2 N products).
+Eigen::MatrixXd matrix_power(const Eigen::MatrixXd& M, Eigen::Index N);
+
 // The z0 with z0 = M^N z0 + zN, where zN is the state one period of N samples after rest: the state at
 // the start of a period in periodic steady state. M^N by repeated squaring.
 Eigen::VectorXd periodic_start(const Eigen::MatrixXd& M, Eigen::Index N, const Eigen::VectorXd& zN);
