@@ -313,14 +313,14 @@ void mimo_line_experiments(const MimoModel& model, const double* const* period_f
     require(L > 0, "period", L, "> 0 samples");
     require(settle_periods >= 0, "settle_periods", settle_periods, ">= 0");
     require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
+    model.validate();
     const auto K = static_cast<Eigen::Index>(seeds.size());
     for (Eigen::Index l = 0; l < K; ++l) require_finite_samples("excitation", period_force[l], L * model.forces());
     if (!steady_start) {
-        lines_from_rest(validated(model), period_force, L, settle_periods, periods, seeds, bins, force_lines,
-                        displacement_lines);
+        lines_from_rest(model, period_force, L, settle_periods, periods, seeds, bins, force_lines, displacement_lines);
         return;
     }
-    steady_lines(validated(model), period_force, L, periods, seeds, bins, force_lines, displacement_lines);
+    steady_lines(model, period_force, L, periods, seeds, bins, force_lines, displacement_lines);
     add_force_line_noise(model, L, periods, seeds, static_cast<Eigen::Index>(bins.size()), force_lines);
 }
 

@@ -10,7 +10,6 @@
 #pragma once
 
 #include <Eigen/Dense>
-#include <complex>
 #include <cstdint>
 #include <vector>
 
