@@ -134,9 +134,9 @@ def _run_chunk(
 
     settle64 = settle.astype(np.int64)
     rows = np.flatnonzero(stable)
-    if rows.size < n:
+    if not rows.size:
         unstable_until_run()
-    if rows.size:
+    else:
         masses = {models[j][0].mass for j in rows}
         require(len(masses) == 1, "mass", sorted(masses), "the same at every point of a sweep (kg)")
 
@@ -147,27 +147,26 @@ def _run_chunk(
                                    seeds[at], periods, plan, window, workers, start == "steady", cancel)  # fmt: skip
 
         everything = np.arange(rows.size)
+        overflowed: list[int] = []
         try:
             parts = [(everything, core_call(everything))]
         except (ValueError, OverflowError):  # a point diverged (e.g. under saturation): find it, flag it
-            if not out:
-                unstable_until_run()
             parts = []
             for j in everything:
                 try:
                     parts.append((everything[j : j + 1], core_call(everything[j : j + 1])))
                 except (ValueError, OverflowError):
-                    out["status"][rows[j]] = STATUS_NAMES.index(OVERFLOW)
+                    overflowed.append(int(rows[j]))
         if rows.size == n and len(parts) == 1:  # every point in one call: its arrays are the results
             for name in _CORE_FIELDS:
                 out[name] = np.asarray(getattr(parts[0][1], name))
             out["status"] = out["status"].copy()  # read-only view of the core's; edited below
         else:
-            if not out:
-                unstable_until_run()
+            unstable_until_run()
             for pick, core in parts:
                 for name in _CORE_FIELDS:
                     out[name][rows[pick]] = np.asarray(getattr(core, name))
+            out["status"][overflowed] = STATUS_NAMES.index(OVERFLOW)
         for j in rows:  # no clearance to touch on the linear law: the state overflowed
             point_rig = models[j][0]
             unbounded = point_rig.force_law == "linear" and point_rig.clearance is None
