@@ -125,7 +125,8 @@ def test_nonlinear_distortion_shows_on_unexcited_lines(lagged_rig, pid) -> None:
 def test_identify_on_saved_recording_equals_run_experiment(lagged_rig, pid, sphs, tmp_path, suffix) -> None:
     rig = replace(lagged_rig, sensor_noise=2e-8, force_noise=1e-3)
     settle, periods = 3, 6
-    est = af.run_experiment(rig, pid, sphs, periods=periods, settle_periods=settle, seed=42)
+    # From rest, run_experiment runs the loop that simulate runs, with the same noise streams.
+    est = af.run_experiment(rig, pid, sphs, periods=periods, settle_periods=settle, seed=42, start="rest")
     trace = af.simulate(rig, pid, np.tile(sphs.samples, settle + periods), seed=42)
     trace.save(tmp_path / f"rec{suffix}")
     rec = af.load_recording(tmp_path / f"rec{suffix}")

@@ -35,6 +35,24 @@ void bind_loop(py::module_& m) {
         "displacement (m) and coil current (A). Releases the GIL while it runs; Ctrl-C stops it.");
 
     m.def(
+        "loop_model",
+        [](const Rig& rig, const Controller& controller) {
+            const MimoModel model = Loop(rig, controller).linear_model();
+            py::dict out;
+            out["M"] = model.M;
+            out["Bf"] = model.Bf;
+            out["Bn"] = model.Bn;
+            out["C"] = model.C;
+            out["Dn"] = model.Dn;
+            out["transducer_pole"] = model.transducer_pole;
+            out["sensor_noise"] = model.sensor_noise;
+            out["force_noise"] = model.force_noise;
+            return out;
+        },
+        py::arg("rig"), py::arg("controller"),
+        "The linear loop as the MIMO model that run_experiment draws its spectra from (Loop::linear_model): "
+        "the arguments of mimo_line_experiments, by name.");
+    m.def(
         "normal_noise",
         [](std::uint64_t seed, const std::vector<Eigen::Index>& chunks, double sigma) {
             Eigen::Index n = 0;

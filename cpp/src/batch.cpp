@@ -104,7 +104,8 @@ void run_points(const Eigen::VectorXd& period_force, const SweepPoint* points, E
     Eigen::Index start = 0;
     while (start < count) {
         const SweepPoint& head = points[start];
-        if (head.rig.force_law == ForceLaw::nonlinear) {
+        // One at a time: the non-linear law, and the spectra drawn without a loop (run_experiment's path).
+        if (head.rig.force_law == ForceLaw::nonlinear || draws_spectra(head.rig, steady_start)) {
             try {
                 store(out, first_row + start,
                       run_experiment(head.rig, head.controller, period_force, head.settle_periods, periods, plan,

@@ -1,10 +1,35 @@
 #include "amb_fast/experiment.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <complex>
+#include <vector>
 
 #include "amb_fast/errors.hpp"
+#include "amb_fast/mimo_lines.hpp"
 
 namespace amb_fast {
+
+bool draws_spectra(const Rig& rig, bool steady_start) {
+    return steady_start && rig.force_law == ForceLaw::linear && std::isinf(rig.touchdown_at()) &&
+           std::isinf(rig.command_limit());
+}
+
+namespace {
+LineEstimate drawn_experiment(const Rig& rig, const Controller& controller, const double* period_force,
+                              Eigen::Index settle_periods, Eigen::Index periods, const LinePlan& plan,
+                              std::uint64_t seed, int median_window) {
+    PeriodEstimator estimator(plan);
+    SteadyLines draw(Loop(rig, controller, seed).linear_model(), plan.period, estimator.bins());
+    draw.start(period_force, seed);
+    std::vector<std::complex<double>> force(estimator.bins().size()), displacement(force.size());
+    for (Eigen::Index p = 0; p < settle_periods + periods; ++p) {
+        draw.next(force.data(), displacement.data());
+        if (p >= settle_periods) estimator.add_period_lines(force.data(), displacement.data());
+    }
+    return estimator.estimate(rig.mass, controller.fs, median_window);
+}
+}  // namespace
 
 LineEstimate run_experiment(const Rig& rig, const Controller& controller, const Eigen::Ref<const Eigen::VectorXd>& period_force,
                             Eigen::Index settle_periods, Eigen::Index periods, LinePlan plan, std::uint64_t seed,
@@ -15,6 +40,8 @@ LineEstimate run_experiment(const Rig& rig, const Controller& controller, const 
     require(settle_periods >= 0, "settle_periods", settle_periods, ">= 0");
     require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
     plan.periods_per_block = periods_per_block(periods);
+    if (draws_spectra(rig, steady_start))
+        return drawn_experiment(rig, controller, period_force.data(), settle_periods, periods, plan, seed, median_window);
     Loop loop(rig, controller, seed);
     if (steady_start) loop.start_periodic(period_force.data(), L);
     PeriodEstimator estimator(plan);

@@ -512,6 +512,26 @@ void Loop::start_periodic_from(const Loop& probe, Eigen::Index L) {
     transducer_.set_state(periodic_transducer_start(transducer_.pole(), L, probe.transducer_.state()));
 }
 
+MimoModel Loop::linear_model() const {
+    Rig linear = rig_;
+    linear.force_law = ForceLaw::linear;
+    const SampleMap plant = plant_ ? *plant_ : sample_map(linear, T_);
+    const ClosedLoopMap map(plant, sensed_, controller_.controller(), fraction_);
+    const Eigen::Index n = map.M.rows();
+    MimoModel model;
+    model.M = map.M;
+    model.Bf = Eigen::MatrixXd::Zero(n, 1);
+    model.Bf.topRows(state::size) = plant.Gf;
+    model.Bn = map.noise_in;
+    model.C = Eigen::MatrixXd::Zero(1, n);
+    model.C(0, sensed_) = 1.0;
+    model.Dn = Eigen::MatrixXd::Ones(1, 1);
+    model.transducer_pole = Eigen::VectorXd::Constant(1, transducer_.pole());
+    model.sensor_noise = Eigen::VectorXd::Constant(1, rig_.sensor_noise);
+    model.force_noise = Eigen::VectorXd::Constant(1, rig_.force_noise);
+    return model;
+}
+
 void Loop::fail(Eigen::Index sample, const char* what) const {
     std::ostringstream msg;
     msg << what << " (at sample " << sample << ", t = " << sample * T_ << " s)";

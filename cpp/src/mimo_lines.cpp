@@ -97,31 +97,6 @@ Eigen::VectorXd balancing(const Eigen::MatrixXd& M) {
     return d;
 }
 
-// The force transducers' white noise added to every period's force lines (the periods' own lines
-// copied from period 0, which holds them on entry): N(0, L sigma^2 / 2) in the real and in the
-// imaginary part, one stream per experiment and channel, line by line, period by period.
-void add_force_line_noise(const MimoModel& model, Eigen::Index L, Eigen::Index periods,
-                          const std::vector<std::uint64_t>& seeds, Eigen::Index B, cd* force_lines) {
-    const Eigen::Index p = model.forces();
-    const auto K = static_cast<Eigen::Index>(seeds.size());
-    std::vector<cd> first(static_cast<std::size_t>(B));
-    for (Eigen::Index l = 0; l < K; ++l)
-        for (Eigen::Index c = 0; c < p; ++c) {
-            const double sigma = std::sqrt(0.5 * static_cast<double>(L)) * model.force_noise[c];
-            NormalStream draws(stream_seed(seeds[static_cast<std::size_t>(l)], 2, c));
-            for (Eigen::Index j = 0; j < B; ++j) first[static_cast<std::size_t>(j)] = force_lines[(j * p + c) * K + l];
-            for (Eigen::Index period = 0; period < periods; ++period)
-                for (Eigen::Index j = 0; j < B; ++j) {
-                    cd value = first[static_cast<std::size_t>(j)];
-                    if (sigma > 0.0) {
-                        const double re = draws(), im = draws();
-                        value += cd(sigma * re, sigma * im);
-                    }
-                    force_lines[((period * B + j) * p + c) * K + l] = value;
-                }
-        }
-}
-
 // From rest: the loop sample by sample, every recorded period transformed.
 void lines_from_rest(const MimoModel& model, const double* const* period_force, Eigen::Index L,
                      Eigen::Index settle_periods, Eigen::Index periods, const std::vector<std::uint64_t>& seeds,
@@ -173,134 +148,190 @@ void lines_from_rest(const MimoModel& model, const double* const* period_force, 
     }
 }
 
-// The steady-state line spectra drawn directly (mimo_lines.hpp). Per line, with z = e^{jw} and M = T H T^-1
-// (H upper Hessenberg): what the forces and the probe noise give at the probes (G), what the noise's
-// spectrum gives the state at the period's end (through Xn), and what a state change over the period
-// gives at the probes (CRz). The noise's state is carried from period to period. An unstable loop
-// makes M^L or the stationary covariance overflow, and the spectra non-finite: refused.
-void steady_lines(const MimoModel& model, const double* const* period_force, Eigen::Index L, Eigen::Index periods,
-                  const std::vector<std::uint64_t>& seeds, const std::vector<Eigen::Index>& bins, cd* force_lines,
-                  cd* displacement_lines) {
-    const auto K = static_cast<Eigen::Index>(seeds.size());
-    const Eigen::Index n = model.states(), p = model.forces(), q = model.probes();
-    const auto B = static_cast<Eigen::Index>(bins.size());
-    for (const Eigen::Index bin : bins)
+}  // namespace
+
+// Per line, with z = e^{jw} and M = T H T^-1 (H upper Hessenberg): what the forces and the probe noise
+// give at the probes (G), what the noise's spectrum gives the state at the period's end (through Xn),
+// and what a state change over the period gives at the probes (CRz).
+SteadyLines::SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eigen::Index> bins)
+    : model_(validated(model)),
+      L_(L),
+      bins_(std::move(bins)),
+      transform_(L, bins_, LineTransform::Method::automatic) {
+    const Eigen::Index n = model_.states(), p = model_.forces(), q = model_.probes(), m = p + q;
+    const auto B = static_cast<Eigen::Index>(bins_.size());
+    for (const Eigen::Index bin : bins_)
         require(bin > 0 && 2 * bin < L, "bin", bin, "strictly between 0 and half the period (steady start)");
     // M = T H T^-1 with T = D Q: D balances, Q is the orthogonal Hessenberg reduction of D^-1 M D.
-    const Eigen::VectorXd scale = balancing(model.M);
-    const Eigen::MatrixXd balanced = scale.cwiseInverse().asDiagonal() * model.M * scale.asDiagonal();
+    const Eigen::VectorXd scale = balancing(model_.M);
+    const Eigen::MatrixXd balanced = scale.cwiseInverse().asDiagonal() * model_.M * scale.asDiagonal();
     const Eigen::HessenbergDecomposition<Eigen::MatrixXd> hessenberg(balanced);
     const Eigen::MatrixXd H = hessenberg.matrixH(), Q = hessenberg.matrixQ();
-    const Eigen::MatrixXd T = scale.asDiagonal() * Q, T_inverse = Q.transpose() * scale.cwiseInverse().asDiagonal();
-    Eigen::MatrixXd inputs(n, p + q);
-    inputs << model.Bf, model.Bn;
-    const Eigen::MatrixXcd Bt = (T_inverse * inputs).cast<cd>();
-    const Eigen::MatrixXcd Ct = (model.C.topRows(q) * T).cast<cd>();
-    const Eigen::MatrixXcd Dn = model.Dn.topRows(q).cast<cd>();
-    const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n), ML = matrix_power(model.M, L);
-    const Eigen::MatrixXd W = (I - ML) * T;  // the state change over a period, from Hessenberg coordinates
+    const Eigen::MatrixXd T = scale.asDiagonal() * Q;
+    T_inverse_ = Q.transpose() * scale.cwiseInverse().asDiagonal();
+    Eigen::MatrixXd inputs(n, m);
+    inputs << model_.Bf, model_.Bn;
+    const Eigen::MatrixXcd Bt = (T_inverse_ * inputs).cast<cd>();
+    const Eigen::MatrixXcd Ct = (model_.C.topRows(q) * T).cast<cd>();
+    const Eigen::MatrixXcd Dn = model_.Dn.topRows(q).cast<cd>();
+    const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
+    ML_ = matrix_power(model_.M, L);
+    const Eigen::MatrixXd W = (I - ML_) * T;  // the state change over a period, from Hessenberg coordinates
     // Per line k: G = Ct (zI - H)^-1 T^-1 [Bf Bn] + [0 Dn], the probes' response to the forces (p columns)
     // and to the noise (q), from the rows of C (zI - M)^-1 T = Ct (zI - H)^-1 (transposed solves); kept
     // times z, real and imaginary parts apart (CRz), for the state's change over a period. And
     // Xn = (zI - H)^-1 T^-1 Bn, the state's response to the noise (Hessenberg coordinates), as real
     // columns (Re, -Im) per probe, so that Re(Xn V) is one real product with V as (Re, Im) pairs.
-    const Eigen::Index m = p + q;
-    Eigen::MatrixXcd G(q, B * m), CR(q, n);
-    Eigen::MatrixXd CRz_re(B * q, n), CRz_im(B * q, n), Xn(n, 2 * B * q);
+    G_.resize(q, B * m);
+    CRz_re_.resize(B * q, n);
+    CRz_im_.resize(B * q, n);
+    Xn_.resize(n, 2 * B * q);
+    z_.resize(static_cast<std::size_t>(B));
+    Eigen::MatrixXcd CR(q, n);
     Eigen::VectorXcd x(n);
-    std::vector<cd> z(static_cast<std::size_t>(B));
     for (Eigen::Index k = 0; k < B; ++k) {
         poll_interrupt();
-        const cd zk = std::polar(1.0, 2.0 * pi * static_cast<double>(bins[static_cast<std::size_t>(k)]) /
+        const cd zk = std::polar(1.0, 2.0 * pi * static_cast<double>(bins_[static_cast<std::size_t>(k)]) /
                                           static_cast<double>(L));
-        z[static_cast<std::size_t>(k)] = zk;
+        z_[static_cast<std::size_t>(k)] = zk;
         const HessenbergLU lu(H, zk);
         for (Eigen::Index j = 0; j < q; ++j) {
             x = Bt.col(p + j);
             lu.solve(x.data());
-            Xn.col(2 * (k * q + j)) = x.real();
-            Xn.col(2 * (k * q + j) + 1) = -x.imag();
+            Xn_.col(2 * (k * q + j)) = x.real();
+            Xn_.col(2 * (k * q + j) + 1) = -x.imag();
         }
         for (Eigen::Index i = 0; i < q; ++i) {
             x = Ct.row(i).transpose();
             lu.solve_transposed(x.data());
             CR.row(i) = x.transpose();
         }
-        G.middleCols(k * m, m).noalias() = CR * Bt;
-        G.middleCols(k * m + p, q) += Dn;
-        CRz_re.middleRows(k * q, q) = (zk * CR).real();
-        CRz_im.middleRows(k * q, q) = (zk * CR).imag();
+        G_.middleCols(k * m, m).noalias() = CR * Bt;
+        G_.middleCols(k * m + p, q) += Dn;
+        CRz_re_.middleRows(k * q, q) = (zk * CR).real();
+        CRz_im_.middleRows(k * q, q) = (zk * CR).imag();
     }
     // The noise's state: stationary covariance P; over a period w = zL - M^L z0 has covariance
     // P - M^L P M^LT, of which the lines' spectra explain (2 / L) sum sigma^2 Re(S S^H), S = W Xn.
-    const std::vector<Eigen::MatrixXd> roots = probe_noise_roots(model);
+    roots_ = probe_noise_roots(model_);
     Eigen::MatrixXd P = Eigen::MatrixXd::Zero(n, n);
-    for (const auto& root : roots) P += root * root.transpose();
+    for (const auto& root : roots_) P += root * root.transpose();
     Eigen::VectorXd explained(2 * B * q);  // per column of Xn: (2 / L) sigma^2 of its probe
     for (Eigen::Index k = 0; k < B; ++k)
         for (Eigen::Index j = 0; j < q; ++j)
             explained.segment(2 * (k * q + j), 2).setConstant(2.0 / static_cast<double>(L) *
-                                                              model.sensor_noise[j] * model.sensor_noise[j]);
+                                                              model_.sensor_noise[j] * model_.sensor_noise[j]);
     Eigen::MatrixXd residual =
-        P - ML * P * ML.transpose() - W * (Xn * explained.asDiagonal() * Xn.transpose()) * W.transpose();
+        P - ML_ * P * ML_.transpose() - W * (Xn_ * explained.asDiagonal() * Xn_.transpose()) * W.transpose();
     residual = 0.5 * (residual + residual.transpose()).eval();
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(residual);
-    const Eigen::MatrixXd residual_root = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
-    const Eigen::MatrixXd WL = (2.0 / static_cast<double>(L)) * W;
-    LineTransform transform(L, bins, LineTransform::Method::automatic);
-    Eigen::VectorXd channel(L), draws(n), z0(n), zL(n), d(n), v(2 * B * q), change_re(B * q), change_im(B * q);
+    residual_root_ = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+    WL_ = (2.0 / static_cast<double>(L)) * W;
+    clean_force_.resize(B, p);
+    det_.resize(B * q);
+    z0_.resize(n);
+    zL_.resize(n);
+    draws_.resize(n);
+    d_.resize(n);
+    v_.resize(2 * B * q);
+    change_re_.resize(B * q);
+    change_im_.resize(B * q);
+}
+
+void SteadyLines::start(const double* period_force, std::uint64_t seed) {
+    const Eigen::Index p = model_.forces(), q = model_.probes(), m = p + q;
+    const auto B = static_cast<Eigen::Index>(bins_.size());
+    require_finite_samples("excitation", period_force, L_ * p);
+    // The forces' lines, the probes' periodic response to them, the recorded (transduced) force lines.
+    Eigen::VectorXd channel(L_);
     std::vector<cd> spectrum(static_cast<std::size_t>(B));
     Eigen::MatrixXcd F(B, p);
-    Eigen::VectorXcd det(B * q);
-    for (Eigen::Index l = 0; l < K; ++l) {
-        const std::uint64_t seed = seeds[static_cast<std::size_t>(l)];
-        // The forces' lines, the probes' periodic response to them, the recorded (transduced) force lines.
-        for (Eigen::Index c = 0; c < p; ++c) {
-            for (Eigen::Index k = 0; k < L; ++k) channel[k] = period_force[l][k * p + c];
-            transform(channel.data(), spectrum.data());
-            const double a = model.transducer_pole[c];
-            for (Eigen::Index k = 0; k < B; ++k) {
-                const cd zk = z[static_cast<std::size_t>(k)];
-                F(k, c) = spectrum[static_cast<std::size_t>(k)];
-                force_lines[(k * p + c) * K + l] = a > 0.0 ? F(k, c) * (zk - 1.0) / (zk - a) : F(k, c);
-            }
+    for (Eigen::Index c = 0; c < p; ++c) {
+        for (Eigen::Index k = 0; k < L_; ++k) channel[k] = period_force[k * p + c];
+        transform_(channel.data(), spectrum.data());
+        const double a = model_.transducer_pole[c];
+        for (Eigen::Index k = 0; k < B; ++k) {
+            const cd zk = z_[static_cast<std::size_t>(k)];
+            F(k, c) = spectrum[static_cast<std::size_t>(k)];
+            clean_force_(k, c) = a > 0.0 ? F(k, c) * (zk - 1.0) / (zk - a) : F(k, c);
         }
-        for (Eigen::Index k = 0; k < B; ++k)
-            det.segment(k * q, q) = G.middleCols(k * m, p) * F.row(k).transpose();
-        // The noise: the state starts in its stationary distribution, then period by period.
-        NormalStream rest(stream_seed(seed, 3, 0));
-        std::vector<NormalStream> probe;
-        for (Eigen::Index j = 0; j < q; ++j) probe.emplace_back(stream_seed(seed, 0, j));
-        z0.setZero();
-        add_stationary_noise(roots, seed, z0);
-        for (Eigen::Index period = 0; period < periods; ++period) {
-            poll_interrupt();
-            for (Eigen::Index j = 0; j < q; ++j) {  // V: (Re, Im) per line and probe
-                const double sigma = std::sqrt(0.5 * static_cast<double>(L)) * model.sensor_noise[j];
-                for (Eigen::Index k = 0; k < B; ++k) {
-                    double re = 0.0, im = 0.0;
-                    if (sigma > 0.0) re = probe[static_cast<std::size_t>(j)](), im = probe[static_cast<std::size_t>(j)]();
-                    v[2 * (k * q + j)] = sigma * re;
-                    v[2 * (k * q + j) + 1] = sigma * im;
-                }
+    }
+    for (Eigen::Index k = 0; k < B; ++k) det_.segment(k * q, q) = G_.middleCols(k * m, p) * F.row(k).transpose();
+    // The noise: the state starts in its stationary distribution, then goes on period by period.
+    rest_.emplace(stream_seed(seed, 3, 0));
+    probe_.clear();
+    for (Eigen::Index j = 0; j < q; ++j) probe_.emplace_back(stream_seed(seed, 0, j));
+    force_.clear();
+    for (Eigen::Index c = 0; c < p; ++c) force_.emplace_back(stream_seed(seed, 2, c));
+    z0_.setZero();
+    add_stationary_noise(roots_, seed, z0_);
+}
+
+void SteadyLines::next(cd* force_lines, cd* displacement_lines) {
+    poll_interrupt();
+    const Eigen::Index p = model_.forces(), q = model_.probes(), m = p + q;
+    const auto B = static_cast<Eigen::Index>(bins_.size());
+    for (Eigen::Index j = 0; j < q; ++j) {  // V: (Re, Im) per line and probe
+        const double sigma = std::sqrt(0.5 * static_cast<double>(L_)) * model_.sensor_noise[j];
+        NormalStream& draw = probe_[static_cast<std::size_t>(j)];
+        for (Eigen::Index k = 0; k < B; ++k) {
+            double re = 0.0, im = 0.0;
+            if (sigma > 0.0) re = draw(), im = draw();
+            v_[2 * (k * q + j)] = sigma * re;
+            v_[2 * (k * q + j) + 1] = sigma * im;
+        }
+    }
+    rest_->fill(draws_.data(), draws_.size(), 1.0);
+    zL_.noalias() = ML_ * z0_;
+    zL_.noalias() += WL_ * (Xn_ * v_);
+    zL_.noalias() += residual_root_ * draws_;
+    d_.noalias() = T_inverse_ * (zL_ - z0_);
+    change_re_.noalias() = CRz_re_ * d_;
+    change_im_.noalias() = CRz_im_ * d_;
+    for (Eigen::Index k = 0; k < B; ++k)
+        for (Eigen::Index i = 0; i < q; ++i) {
+            cd y = det_[k * q + i] - cd(change_re_[k * q + i], change_im_[k * q + i]);
+            for (Eigen::Index j = 0; j < q; ++j)
+                y += G_(i, k * m + p + j) * cd(v_[2 * (k * q + j)], v_[2 * (k * q + j) + 1]);
+            if (!std::isfinite(y.real()) || !std::isfinite(y.imag()))
+                throw std::overflow_error("the line spectra became non-finite: the loop is unstable");
+            displacement_lines[k * q + i] = y;
+        }
+    z0_.swap(zL_);
+    // The force transducers' white noise: N(0, L sigma^2 / 2) in the real and in the imaginary part of
+    // every line, one stream per channel, line by line.
+    for (Eigen::Index c = 0; c < p; ++c) {
+        const double sigma = std::sqrt(0.5 * static_cast<double>(L_)) * model_.force_noise[c];
+        NormalStream& draw = force_[static_cast<std::size_t>(c)];
+        for (Eigen::Index k = 0; k < B; ++k) {
+            cd value = clean_force_(k, c);
+            if (sigma > 0.0) {
+                const double re = draw(), im = draw();
+                value += cd(sigma * re, sigma * im);
             }
-            rest.fill(draws.data(), n, 1.0);
-            zL.noalias() = ML * z0;
-            zL.noalias() += WL * (Xn * v);
-            zL.noalias() += residual_root * draws;
-            d.noalias() = T_inverse * (zL - z0);
-            change_re.noalias() = CRz_re * d;
-            change_im.noalias() = CRz_im * d;
-            for (Eigen::Index k = 0; k < B; ++k)
-                for (Eigen::Index i = 0; i < q; ++i) {
-                    cd y = det[k * q + i] - cd(change_re[k * q + i], change_im[k * q + i]);
-                    for (Eigen::Index j = 0; j < q; ++j)
-                        y += G(i, k * m + p + j) * cd(v[2 * (k * q + j)], v[2 * (k * q + j) + 1]);
-                    if (!std::isfinite(y.real()) || !std::isfinite(y.imag()))
-                        throw std::overflow_error("the line spectra became non-finite: the loop is unstable");
-                    displacement_lines[((period * B + k) * q + i) * K + l] = y;
-                }
-            z0 = zL;
+            force_lines[k * p + c] = value;
+        }
+    }
+}
+
+namespace {
+// From the periodic steady state, the line spectra drawn period by period (SteadyLines), experiment by
+// experiment, into the experiments' interleaved layout.
+void steady_lines(const MimoModel& model, const double* const* period_force, Eigen::Index L, Eigen::Index periods,
+                  const std::vector<std::uint64_t>& seeds, const std::vector<Eigen::Index>& bins, cd* force_lines,
+                  cd* displacement_lines) {
+    const auto K = static_cast<Eigen::Index>(seeds.size());
+    const Eigen::Index p = model.forces(), q = model.probes();
+    const auto B = static_cast<Eigen::Index>(bins.size());
+    SteadyLines draw(model, L, bins);
+    std::vector<cd> f(static_cast<std::size_t>(B * p)), y(static_cast<std::size_t>(B * q));
+    for (Eigen::Index l = 0; l < K; ++l) {
+        draw.start(period_force[l], seeds[static_cast<std::size_t>(l)]);
+        for (Eigen::Index period = 0; period < periods; ++period) {
+            draw.next(f.data(), y.data());
+            for (Eigen::Index i = 0; i < B * p; ++i) force_lines[(period * B * p + i) * K + l] = f[static_cast<std::size_t>(i)];
+            for (Eigen::Index i = 0; i < B * q; ++i)
+                displacement_lines[(period * B * q + i) * K + l] = y[static_cast<std::size_t>(i)];
         }
     }
 }
@@ -321,7 +352,6 @@ void mimo_line_experiments(const MimoModel& model, const double* const* period_f
         return;
     }
     steady_lines(model, period_force, L, periods, seeds, bins, force_lines, displacement_lines);
-    add_force_line_noise(model, L, periods, seeds, static_cast<Eigen::Index>(bins.size()), force_lines);
 }
 
 Estimate2x2 estimate_2x2(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines,

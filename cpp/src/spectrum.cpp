@@ -168,9 +168,11 @@ void PeriodEstimator::restart() {
     const Eigen::Index L = plan_.period, n = static_cast<Eigen::Index>(plan_.excited.size());
     const auto all = static_cast<Eigen::Index>(bins_.size());
     periods_ = in_block_ = blocks_ = block_first_ = 0;
-    have_previous_ = false;
+    have_previous_ = from_lines_ = false;
     sum_F_.setZero(all);
     sum_Y_.setZero(all);
+    open_F_.setZero(all);
+    open_Y_.setZero(all);
     for (auto* v : {&block_f_, &block_y_, &previous_f_, &previous_y_}) v->setZero(L);
     for (auto* v : {&mean_F_, &mean_Y_, &m_FYc_, &m_FF_, &m_YY_, &m_FY_}) v->setZero(n);
     m_FFc_.setZero(n);
@@ -226,6 +228,29 @@ void PeriodEstimator::add_periods(const double* force, const double* displacemen
     }
 }
 
+void PeriodEstimator::add_period_lines(const cd* force_lines, const cd* displacement_lines) {
+    const auto all = static_cast<Eigen::Index>(bins_.size());
+    const Eigen::Map<const Eigen::VectorXcd> F(force_lines, all), Y(displacement_lines, all);
+    from_lines_ = true;
+    ++periods_;
+    ++in_block_;
+    if (plan_.periods_per_block == 1) {
+        lines_f_ = F;
+        lines_y_ = Y;
+        add_block();
+        return;
+    }
+    open_F_ += F;
+    open_Y_ += Y;
+    if (in_block_ < plan_.periods_per_block) return;
+    const double mean = 1.0 / static_cast<double>(plan_.periods_per_block);
+    lines_f_ = mean * open_F_;
+    lines_y_ = mean * open_Y_;
+    open_F_.setZero();
+    open_Y_.setZero();
+    add_block();
+}
+
 void PeriodEstimator::require_finite_block() const {
     if (!std::isfinite(block_f_.sum() + block_y_.sum()))
         throw NonFiniteSamples(block_first_, in_block_ * plan_.period);
@@ -239,7 +264,6 @@ bool PeriodEstimator::new_mean(Eigen::VectorXd& block, const Eigen::VectorXd& pr
 
 void PeriodEstimator::close_block() {
     require_finite_block();
-    ++blocks_;
     // Each channel's block mean, transformed (both at once when both changed), kept as the channel's
     // previous mean without a copy; the sums are zeroed for the next block.
     const Eigen::Index L = plan_.period, bins = static_cast<Eigen::Index>(bins_.size());
@@ -259,6 +283,11 @@ void PeriodEstimator::close_block() {
         block_f_.setZero(L);
         block_y_.setZero(L);
     }
+    add_block();
+}
+
+void PeriodEstimator::add_block() {
+    ++blocks_;
     // The averaged spectra are the sum of the blocks' (the transform is linear): no extra FFT.
     const double G = static_cast<double>(plan_.periods_per_block);
     sum_F_ += G * lines_f_;
@@ -285,15 +314,15 @@ LineEstimate PeriodEstimator::estimate(double mass, double fs, int median_window
     require(blocks_ >= 2, "periods", periods_, "enough for at least 2 independent periods (standard errors)");
     require(median_window >= 1 && median_window % 2 == 1, "median_window", median_window, "an odd number >= 1");
     const Eigen::Index L = plan_.period, n = static_cast<Eigen::Index>(plan_.excited.size());
-    if (in_block_ > 0) require_finite_block();  // the periods that did not fill a last block
+    if (in_block_ > 0 && !from_lines_) require_finite_block();  // the periods that did not fill a last block
     LineEstimate e;
     e.periods = periods_;
     e.blocks = blocks_;
 
     // Averaged spectra of every period (those short of a last full block too), scaled to complex
     // amplitudes: a sine of amplitude A reads |A|.
-    Eigen::VectorXcd F_all = sum_F_, Y_all = sum_Y_;
-    if (in_block_ > 0) {
+    Eigen::VectorXcd F_all = sum_F_ + open_F_, Y_all = sum_Y_ + open_Y_;  // open_: add_period_lines' last block
+    if (in_block_ > 0 && !from_lines_) {
         LineTransform transform = transform_;  // estimate() is const; the transform has scratch space
         Eigen::VectorXcd lines(static_cast<Eigen::Index>(bins_.size()));
         for (auto [block, total] : {std::pair{&block_f_, &F_all}, std::pair{&block_y_, &Y_all}}) {

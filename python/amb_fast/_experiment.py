@@ -221,6 +221,15 @@ def run_experiment(
     force law starts from the linearised steady state and settles from there. ``start="rest"`` starts
     from rest, as a real rig does.
 
+    From the steady start of a linear rig with nothing to watch (no ``current_limit``, no
+    ``clearance``), the loop is not run sample by sample: each recorded period's force and displacement
+    spectra at the lines are drawn directly, exactly in distribution (the loop is linear, so a period's
+    spectrum is its steady response plus the response to that period's noise spectrum and to the state's
+    change over the period; docs "Model", "Drawing the spectra"). The estimate is the same function of
+    them, several times faster; a seed then gives other numbers than :func:`simulate` with that seed.
+    Everywhere else (``start="rest"``, limits, clearances, the non-linear law) the loop runs sample by
+    sample and streams its periods into the estimator.
+
     The excitation period is repeated for ``settle_periods``, then ``periods`` more are recorded,
     averaged and transformed. ``settle_periods=None`` takes 0 for a steady start of a linear rig, else
     enough for the slowest pole ``z_max`` of the linearised closed loop (or the force transducer's AC

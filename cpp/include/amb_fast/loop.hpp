@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "amb_fast/controller.hpp"
+#include "amb_fast/mimo.hpp"
 #include "amb_fast/plant.hpp"
 #include "amb_fast/random.hpp"
 
@@ -84,6 +85,10 @@ public:
     // without noise or limits, from rest), then, once it has run one period, the start it gives.
     Loop periodic_probe() const;
     void start_periodic_from(const Loop& probe, Eigen::Index L);
+    // The linear loop (the linearised one for the non-linear law) as a MimoModel: the stacked state z of
+    // steady.hpp, the shaker force and the sensor noise as inputs, the measured displacement as the one
+    // output, with the rig's transducer and noise levels. What the drawn spectra (SteadyLines) run on.
+    MimoModel linear_model() const;
     // The state as z of steady.hpp, and setting it (the delay line restarts at its head).
     Eigen::VectorXd stacked_state() const;
     void set_stacked_state(const Eigen::VectorXd& z);

@@ -16,9 +16,12 @@
 #include <Eigen/Dense>
 #include <complex>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "amb_fast/mimo.hpp"
+#include "amb_fast/random.hpp"
+#include "amb_fast/spectrum.hpp"
 
 namespace amb_fast {
 
@@ -33,6 +36,37 @@ void mimo_line_experiments(const MimoModel& model, const double* const* period_f
                            Eigen::Index settle_periods, Eigen::Index periods, const std::vector<std::uint64_t>& seeds,
                            bool steady_start, const std::vector<Eigen::Index>& bins, std::complex<double>* force_lines,
                            std::complex<double>* displacement_lines);
+
+// The drawn line spectra of one experiment at a time, period by period (memory O(lines), however
+// many periods): the per-line solves once per model, then start() per experiment and next() per period.
+// The numbers depend only on the model, the period force, the seed and the period's index.
+class SteadyLines {
+public:
+    // bins strictly between 0 and L/2.
+    SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eigen::Index> bins);
+    // A new experiment: period_force (L x p, sample-major) repeated forever, noise from seed; the state
+    // starts in its periodic steady state, the noise-driven part drawn from its stationary distribution.
+    void start(const double* period_force, std::uint64_t seed);
+    // The next period's line spectra: force_lines[line * p + channel] (the recorded, transduced force with
+    // the transducer's noise), displacement_lines[line * q + probe]. Throws std::overflow_error when they
+    // are not finite (an unstable loop).
+    void next(std::complex<double>* force_lines, std::complex<double>* displacement_lines);
+    const std::vector<Eigen::Index>& bins() const { return bins_; }
+
+private:
+    MimoModel model_;
+    Eigen::Index L_;
+    std::vector<Eigen::Index> bins_;
+    LineTransform transform_;                   // the excitation's lines
+    std::vector<std::complex<double>> z_;       // e^{jw} per line
+    Eigen::MatrixXd T_inverse_, ML_, WL_, residual_root_, CRz_re_, CRz_im_, Xn_;
+    Eigen::MatrixXcd G_, clean_force_;
+    std::vector<Eigen::MatrixXd> roots_;        // the stationary noise (probe_noise_roots)
+    Eigen::VectorXcd det_;                      // the probes' periodic response to the forces
+    std::optional<NormalStream> rest_;          // the state's line-free part
+    std::vector<NormalStream> probe_, force_;   // per probe, per force channel
+    Eigen::VectorXd z0_, zL_, draws_, d_, v_, change_re_, change_im_;
+};
 
 // LU factors of zI - H for an upper Hessenberg H, pivoting between neighbouring rows: O(n^2) to factor
 // and per solve, where a dense LU is O(n^3).

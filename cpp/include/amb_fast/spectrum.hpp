@@ -89,13 +89,20 @@ public:
     }
     // Adds `count` consecutive periods from contiguous arrays (faster than one at a time).
     void add_periods(const double* force, const double* displacement, Eigen::Index count, Eigen::Index first_sample);
+    // Adds one period given as its unscaled line spectra at bins() (what add_period transforms the samples
+    // to): for spectra drawn directly (SteadyLines). Not to be mixed with add_period in one experiment.
+    void add_period_lines(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines);
     Eigen::Index periods() const { return periods_; }
+    // The excited harmonics, then the unexcited ones.
+    const std::vector<Eigen::Index>& bins() const { return bins_; }
 
     // mass (kg) enters k = m w^2 + Re H; fs (Hz) sets the line frequencies; window is odd.
     LineEstimate estimate(double mass, double fs, int median_window) const;
 
 private:
     void close_block();
+    // The closed block's spectra (lines_f_, lines_y_, block means) into the sums and co-moments.
+    void add_block();
     void require_finite_block() const;
     // Turns a channel's block sum into its mean; false when the mean repeats `previous` bit for bit (a
     // noise-free periodic channel): its line spectrum is then reused, which saves the transform
@@ -111,6 +118,8 @@ private:
     Eigen::VectorXd previous_f_, previous_y_;  // the last block means (once have_previous_)
     bool have_previous_ = false;
     Eigen::VectorXcd lines_f_, lines_y_;
+    Eigen::VectorXcd open_F_, open_Y_;  // add_period_lines: spectra summed over the open block's periods
+    bool from_lines_ = false;           // periods came as spectra (add_period_lines)
     // Welford means and co-moments of the block spectra at the excited lines.
     Eigen::VectorXcd mean_F_, mean_Y_, m_FYc_, m_FF_, m_YY_, m_FY_;
     Eigen::VectorXd m_FFc_, m_YYc_;
