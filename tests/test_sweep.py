@@ -29,6 +29,23 @@ def same(a: af.SweepResult, b: af.SweepResult) -> None:
     np.testing.assert_array_equal(a.status, b.status)
 
 
+@pytest.mark.parametrize("pid", [af.PID.paper(), af.PID(kp=2e3, ki=1e4, kd=4.0, derivative_cutoff=None, delay=2)])
+def test_gain_sweeps_make_the_controllers_of_single_runs(pid) -> None:
+    """A PID-gain sweep makes its core controllers from the gain arrays (PID._core_controllers): the
+    matrices of each point's own PID, bit for bit, with the integral or the derivative state dropped where
+    its gain is zero."""
+    rng = np.random.default_rng(5)
+    gains = np.column_stack([rng.uniform(1e3, 4e3, 30), rng.uniform(0, 3e4, 30), rng.uniform(0, 6, 30)])
+    gains[::4, 1] = 0.0
+    gains[1::5, 2] = 0.0
+    made = pid._core_controllers(gains)
+    for (kp, ki, kd), core in zip(gains, made):
+        own = replace(pid, kp=kp, ki=ki, kd=kd)._to_core()
+        assert core.order == own.order == int(ki != 0) + int(kd != 0)
+        for name in ("A", "B", "C", "D", "fs", "delay"):
+            np.testing.assert_array_equal(getattr(core, name), getattr(own, name), err_msg=name)
+
+
 def test_sweep_points_equal_single_runs_bit_for_bit(setup) -> None:
     rig, pid, excitation = setup
     result = af.sweep(rig, pid, excitation, kp=[500.0, 1800.0, 2400.0], kd=[0.0, 4.0, 6.0], seed=11, periods=4)

@@ -43,6 +43,10 @@ void bind_params(py::module_& m) {
              }),
              py::kw_only(), py::arg("A"), py::arg("B"), py::arg("C"), py::arg("D"), py::arg("fs"), py::arg("delay"))
         .def_property_readonly("order", &Controller::order, "Number of controller states.")
+        .def_readonly("A", &Controller::A)
+        .def_readonly("B", &Controller::B)
+        .def_readonly("C", &Controller::C)
+        .def_readonly("D", &Controller::D)
         .def_readonly("fs", &Controller::fs)
         .def_readonly("delay", &Controller::delay);
 }

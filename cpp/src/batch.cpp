@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <exception>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
@@ -100,7 +101,7 @@ void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* poi
 void run_points(const Eigen::VectorXd& period_force, const SweepPoint* points, Eigen::Index count, Eigen::Index periods,
                 const LinePlan& plan, int median_window, bool steady_start, SweepEstimates& out,
                 Eigen::Index first_row) {
-    Workspace work(plan, lanes_available());
+    std::optional<Workspace> work;  // for the loops run side by side, made when the first group comes
     Eigen::Index start = 0;
     while (start < count) {
         const SweepPoint& head = points[start];
@@ -124,8 +125,9 @@ void run_points(const Eigen::VectorXd& period_force, const SweepPoint* points, E
             return Loop::can_share_lanes(head.rig, head.controller, p.rig, p.controller);
         };
         while (lanes < most && start + lanes < count && fits(points[start + lanes])) ++lanes;
+        if (!work) work.emplace(plan, lanes_available());
         run_linear_group(period_force, points + start, lanes, periods, median_window, steady_start, out,
-                         first_row + start, work);
+                         first_row + start, *work);
         start += lanes;
     }
 }

@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 
 #include "amb_fast/errors.hpp"
@@ -19,27 +20,38 @@ namespace {
 cd reciprocal(cd x) { return std::conj(x) / std::norm(x); }
 }  // namespace
 
-HessenbergLU::HessenbergLU(const Eigen::MatrixXd& H, cd z)
+HessenbergLU::HessenbergLU(const Eigen::MatrixXd& H)
     : n_(H.rows()),
-      U_(-H.cast<cd>()),
+      H_(H),
+      U_(n_, n_),
       inverse_diagonal_(static_cast<std::size_t>(n_)),
       multiplier_(static_cast<std::size_t>(std::max<Eigen::Index>(n_ - 1, 0))),
-      swapped_(multiplier_.size(), 0) {
-    U_.diagonal().array() += z;
-    for (Eigen::Index j = 0; j < n_; ++j) {
-        if (j + 1 < n_) {
-            if (std::norm(U_(j + 1, j)) > std::norm(U_(j, j))) {
-                U_.row(j).segment(j, n_ - j).swap(U_.row(j + 1).segment(j, n_ - j));
-                swapped_[static_cast<std::size_t>(j)] = 1;
-            }
+      swapped_(multiplier_.size(), 0) {}
+
+void HessenbergLU::factor(cd z) {
+    // Plain loops over the row-major factor: rows of a few entries, where Eigen's segment expressions
+    // cost more than the arithmetic.
+    const Eigen::Index n = n_;
+    cd* U = U_.data();
+    for (Eigen::Index i = 0; i < n; ++i)
+        for (Eigen::Index c = 0; c < n; ++c) U[i * n + c] = -H_(i, c);
+    for (Eigen::Index i = 0; i < n; ++i) U[i * n + i] += z;
+    for (Eigen::Index j = 0; j < n; ++j) {
+        cd* row = U + j * n;
+        cd* below = row + n;
+        if (j + 1 < n) {
+            const bool swap = std::norm(below[j]) > std::norm(row[j]);
+            swapped_[static_cast<std::size_t>(j)] = swap;
+            if (swap)
+                for (Eigen::Index c = j; c < n; ++c) std::swap(row[c], below[c]);
         }
-        if (U_(j, j) == 0.0) throw std::invalid_argument("zI - H is singular: z is a pole of the loop");
-        inverse_diagonal_[static_cast<std::size_t>(j)] = reciprocal(U_(j, j));
-        if (j + 1 == n_) break;
-        const cd l = U_(j + 1, j) * inverse_diagonal_[static_cast<std::size_t>(j)];
+        if (row[j] == 0.0) throw std::invalid_argument("zI - H is singular: z is a pole of the loop");
+        inverse_diagonal_[static_cast<std::size_t>(j)] = reciprocal(row[j]);
+        if (j + 1 == n) break;
+        const cd l = below[j] * inverse_diagonal_[static_cast<std::size_t>(j)];
         multiplier_[static_cast<std::size_t>(j)] = l;
-        U_.row(j + 1).segment(j + 1, n_ - j - 1) -= l * U_.row(j).segment(j + 1, n_ - j - 1);
-        U_(j + 1, j) = 0.0;
+        for (Eigen::Index c = j + 1; c < n; ++c) below[c] -= l * row[c];
+        below[j] = 0.0;
     }
 }
 
@@ -50,7 +62,8 @@ void HessenbergLU::solve(cd* x) const {
     }
     for (Eigen::Index i = n_ - 1; i >= 0; --i) {
         cd sum = x[i];
-        for (Eigen::Index c = i + 1; c < n_; ++c) sum -= U_(i, c) * x[c];
+        const cd* row = U_.data() + i * n_;
+        for (Eigen::Index c = i + 1; c < n_; ++c) sum -= row[c] * x[c];
         x[i] = sum * inverse_diagonal_[static_cast<std::size_t>(i)];
     }
 }
@@ -58,7 +71,8 @@ void HessenbergLU::solve(cd* x) const {
 void HessenbergLU::solve_transposed(cd* x) const {
     for (Eigen::Index i = 0; i < n_; ++i) {  // U^T t = b
         cd sum = x[i];
-        for (Eigen::Index k = 0; k < i; ++k) sum -= U_(k, i) * x[k];
+        const cd* column = U_.data() + i;
+        for (Eigen::Index k = 0; k < i; ++k) sum -= column[k * n_] * x[k];
         x[i] = sum * inverse_diagonal_[static_cast<std::size_t>(i)];
     }
     for (Eigen::Index j = n_ - 2; j >= 0; --j) {  // then the row operations transposed, last first
@@ -189,12 +203,13 @@ SteadyLines::SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eig
     z_.resize(static_cast<std::size_t>(B));
     Eigen::MatrixXcd CR(q, n);
     Eigen::VectorXcd x(n);
+    HessenbergLU lu(H);
     for (Eigen::Index k = 0; k < B; ++k) {
-        poll_interrupt();
+        if (k % 64 == 0) poll_interrupt();
         const cd zk = std::polar(1.0, 2.0 * pi * static_cast<double>(bins_[static_cast<std::size_t>(k)]) /
                                           static_cast<double>(L));
         z_[static_cast<std::size_t>(k)] = zk;
-        const HessenbergLU lu(H, zk);
+        lu.factor(zk);
         for (Eigen::Index j = 0; j < q; ++j) {
             x = Bt.col(p + j);
             lu.solve(x.data());
@@ -206,7 +221,7 @@ SteadyLines::SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eig
             lu.solve_transposed(x.data());
             CR.row(i) = x.transpose();
         }
-        G_.middleCols(k * m, m).noalias() = CR * Bt;
+        G_.middleCols(k * m, m).noalias() = CR.lazyProduct(Bt);  // tiny: no blocked product
         G_.middleCols(k * m + p, q) += Dn;
         CRz_re_.middleRows(k * q, q) = (zk * CR).real();
         CRz_im_.middleRows(k * q, q) = (zk * CR).imag();
@@ -243,12 +258,26 @@ void SteadyLines::start(const double* period_force, std::uint64_t seed) {
     const auto B = static_cast<Eigen::Index>(bins_.size());
     require_finite_samples("excitation", period_force, L_ * p);
     // The forces' lines, the probes' periodic response to them, the recorded (transduced) force lines.
-    Eigen::VectorXd channel(L_);
-    std::vector<cd> spectrum(static_cast<std::size_t>(B));
+    // The last channel transformed on this thread, kept: a sweep's points and repeated experiments share
+    // their excitation, and comparing it costs a twentieth of its transform.
+    thread_local struct {
+        std::vector<double> samples;
+        std::vector<Eigen::Index> bins;
+        std::vector<cd> lines;
+    } last;
+    std::vector<double> channel(static_cast<std::size_t>(L_));
     Eigen::MatrixXcd F(B, p);
     for (Eigen::Index c = 0; c < p; ++c) {
-        for (Eigen::Index k = 0; k < L_; ++k) channel[k] = period_force[k * p + c];
-        transform_(channel.data(), spectrum.data());
+        for (Eigen::Index k = 0; k < L_; ++k) channel[static_cast<std::size_t>(k)] = period_force[k * p + c];
+        const bool same = last.samples.size() == channel.size() && bins_ == last.bins &&
+                          std::memcmp(channel.data(), last.samples.data(), channel.size() * sizeof(double)) == 0;
+        if (!same) {  // bitwise: the transform of the very same samples
+            last.lines.resize(static_cast<std::size_t>(B));
+            transform_(channel.data(), last.lines.data());
+            last.samples = channel;
+            last.bins = bins_;
+        }
+        const std::vector<cd>& spectrum = last.lines;
         const double a = model_.transducer_pole[c];
         for (Eigen::Index k = 0; k < B; ++k) {
             const cd zk = z_[static_cast<std::size_t>(k)];
@@ -256,7 +285,7 @@ void SteadyLines::start(const double* period_force, std::uint64_t seed) {
             clean_force_(k, c) = a > 0.0 ? F(k, c) * (zk - 1.0) / (zk - a) : F(k, c);
         }
     }
-    for (Eigen::Index k = 0; k < B; ++k) det_.segment(k * q, q) = G_.middleCols(k * m, p) * F.row(k).transpose();
+    for (Eigen::Index k = 0; k < B; ++k) det_.segment(k * q, q) = G_.middleCols(k * m, p).lazyProduct(F.row(k).transpose());
     // The noise: the state starts in its stationary distribution, then goes on period by period.
     rest_.emplace(stream_seed(seed, 3, 0));
     probe_.clear();

@@ -73,11 +73,8 @@ LineTransform::LineTransform(Eigen::Index period, std::vector<Eigen::Index> bins
         method_ = direct_cost(L_, static_cast<Eigen::Index>(bins_.size())) < fft_cost(L_) ? Method::direct
                                                                                           : Method::fft;
     if (method_ == Method::fft) {
-        plan_ = real_plan(L_);
-        work_.resize(static_cast<std::size_t>(L_));
-#ifndef POCKETFFT_NO_VECTORS
-        pair_work_.resize(static_cast<std::size_t>(L_ + 1) * vector_lanes);
-#endif
+        plan_ = real_plan(L_);  // the work buffers come with the first transform (an estimator fed
+                                // spectra never transforms)
     } else {
         const pocketfft::detail::sincos_2pibyn<double> roots(static_cast<std::size_t>(L_));  // exp(+2 pi i n / L)
         twiddle_.resize(static_cast<std::size_t>(L_));
@@ -89,6 +86,7 @@ void LineTransform::operator()(const double* x, std::complex<double>* lines) {
     const auto L = static_cast<std::size_t>(L_);
     if (method_ == Method::fft) {
         // In place, FFTPACK's half-complex order: r0, r1, i1, r2, i2, ..., (r_{L/2} if L is even).
+        work_.resize(L);
         std::copy(x, x + L, work_.begin());
         plan_->exec(work_.data(), 1.0, true);
         pick_bins(bins_, L, [this](std::size_t i) { return work_[i]; }, lines);
@@ -123,6 +121,7 @@ void LineTransform::operator()(const double* x, const double* y, cd* lines_x, cd
         // Lane 0 carries x, lane 1 y (further lanes zeros): each lane sees exactly the operations of
         // the one-channel transform, so the digits are the same; the two run in one instruction stream.
         const auto L = static_cast<std::size_t>(L_);
+        pair_work_.resize((L + 1) * vector_lanes);  // room to align L vectors
         void* raw = pair_work_.data();
         std::size_t room = pair_work_.size() * sizeof(double);
         auto* v = static_cast<RealVector*>(std::align(alignof(RealVector), L * sizeof(RealVector), raw, room));
@@ -173,7 +172,9 @@ void PeriodEstimator::restart() {
     sum_Y_.setZero(all);
     open_F_.setZero(all);
     open_Y_.setZero(all);
-    for (auto* v : {&block_f_, &block_y_, &previous_f_, &previous_y_}) v->setZero(L);
+    // The time-domain sums come with the first period of samples (add_periods), then stay.
+    for (auto* v : {&block_f_, &block_y_, &previous_f_, &previous_y_})
+        if (v->size() == L) v->setZero();
     for (auto* v : {&mean_F_, &mean_Y_, &m_FYc_, &m_FF_, &m_YY_, &m_FY_}) v->setZero(n);
     m_FFc_.setZero(n);
     m_YYc_.setZero(n);
@@ -201,6 +202,8 @@ void accumulate(Eigen::VectorXd& acc, const double* x, Eigen::Index L, Eigen::In
 void PeriodEstimator::add_periods(const double* force, const double* displacement, Eigen::Index count,
                                   Eigen::Index first_sample) {
     const Eigen::Index L = plan_.period;
+    if (block_f_.size() != L)
+        for (auto* v : {&block_f_, &block_y_, &previous_f_, &previous_y_}) v->setZero(L);
     if (plan_.periods_per_block == 1) {  // each period is a block: its mean is the period, no sum needed
         for (; count > 0; --count, force += L, displacement += L, first_sample += L) {
             block_first_ = first_sample;

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -133,10 +134,19 @@ class Estimate:
 
 
 def _plan(harmonics: np.ndarray, period: int) -> tuple[_core.LinePlan, np.ndarray]:
+    """The core's plan for these excited harmonics, and the unexcited ones below the highest (read-only;
+    made once per distinct excitation)."""
+    return _cached_plan(np.asarray(harmonics, dtype=np.int64).tobytes(), int(period))
+
+
+@functools.lru_cache(maxsize=64)
+def _cached_plan(harmonics_bytes: bytes, period: int) -> tuple[_core.LinePlan, np.ndarray]:
+    harmonics = np.frombuffer(harmonics_bytes, dtype=np.int64)
     gaps = np.ones(int(harmonics.max()) + 1, dtype=bool)
     gaps[0] = False
     gaps[harmonics] = False
     unexcited = np.flatnonzero(gaps)
+    unexcited.flags.writeable = False
     return _core.LinePlan(period=period, excited=harmonics, unexcited=unexcited), unexcited
 
 

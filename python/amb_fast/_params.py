@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import asdict, dataclass
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -225,28 +225,57 @@ class PID:
         at most two states, each only where its gain is non-zero: the integral's (pole 1) and the
         derivative's (pole a), using ``(1 - z^-1)/(1 - a z^-1) = 1 + (a - 1) z^-1/(1 - a z^-1)``.
         """
-        T = 1.0 / self.fs
-        a = float(np.exp(-2 * np.pi * self.derivative_cutoff * T)) if self.derivative_cutoff is not None else 0.0
-        kd_gain = self.kd * (1 - a) / T
+        integral_in, derivative_out, D = self._terms(self.kp, self.ki, self.kd)
         poles: list[float] = []
         inputs: list[float] = []
         outputs: list[float] = []
         if self.ki != 0:
             poles.append(1.0)
-            inputs.append(self.ki * T)
+            inputs.append(integral_in)
             outputs.append(1.0)
         if self.kd != 0:
-            poles.append(a)
+            poles.append(self._derivative_pole())
             inputs.append(1.0)
-            outputs.append(kd_gain * (a - 1.0))
+            outputs.append(derivative_out)
         m = len(poles)
         A = np.diag(poles).reshape(m, m)
         B = np.array(inputs, dtype=float).reshape(m, 1)
         C = np.array(outputs, dtype=float).reshape(1, m)
-        return A, B, C, np.array([[self.kp + self.ki * T + kd_gain]])
+        return A, B, C, np.array([[D]])
+
+    def _derivative_pole(self) -> float:
+        """The derivative filter's pole a = exp(-2 pi fd T) (0 without a filter)."""
+        if self.derivative_cutoff is None:
+            return 0.0
+        T = 1.0 / self.fs
+        return float(np.exp(-2 * np.pi * self.derivative_cutoff * T))
+
+    def _terms(self, kp: Any, ki: Any, kd: Any) -> tuple[Any, Any, Any]:
+        """The integral's input ki T, the derivative's output kd_gain (a - 1) and the direct term
+        kp + ki T + kd_gain, for these gains (floats, or arrays: the same operations element by element,
+        so the same digits) with this PID's fs and derivative filter; kd_gain = kd (1 - a) / T."""
+        T = 1.0 / self.fs
+        a = self._derivative_pole()
+        kd_gain = kd * (1 - a) / T
+        return ki * T, kd_gain * (a - 1.0), kp + ki * T + kd_gain
+
+    def _core_controllers(self, gains: np.ndarray) -> list[_core.Controller]:
+        """The core's controllers of this PID with each row of ``gains`` (kp, ki, kd): the numbers of
+        ``replace(self, kp=..., ki=..., kd=...)._to_core()``, without making the PIDs (sweeps)."""
+        kp, ki, kd = (np.ascontiguousarray(gains[:, j], dtype=float) for j in range(3))
+        integral_in, derivative_out, D = self._terms(kp, ki, kd)
+        a = self._derivative_pole()
+        A = {(i, d): np.diag([1.0] * i + [a] * d).reshape(i + d, i + d) for i in (0, 1) for d in (0, 1)}
+        out = []
+        for j, (with_i, with_d) in enumerate(zip((ki != 0).tolist(), (kd != 0).tolist())):
+            B = [integral_in[j]] * with_i + [1.0] * with_d
+            C = [1.0] * with_i + [derivative_out[j]] * with_d
+            out.append(_core.Controller(A=A[with_i, with_d], B=np.array(B), C=np.array(C), D=float(D[j]), fs=self.fs,
+                                        delay=self.delay))  # fmt: skip
+        return out
 
     def _to_core(self) -> _core.Controller:
-        return _core_controller(*self.state_space(), self.fs, self.delay)
+        return _core_pid(self)
 
 
 # The core's copies of the parameters, made once per distinct value (the dataclasses are frozen).
@@ -255,6 +284,11 @@ def _core_rig(rig: Rig) -> _core.Rig:
     fields = asdict(rig)
     fields["force_law"] = _core.ForceLaw.__members__[rig.force_law]
     return _core.Rig(**fields)
+
+
+@functools.lru_cache(maxsize=256)
+def _core_pid(pid: PID) -> _core.Controller:
+    return _core_controller(*pid.state_space(), pid.fs, pid.delay)
 
 
 def _core_controller(

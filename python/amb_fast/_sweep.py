@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Callable
-from concurrent.futures import Executor, ThreadPoolExecutor
+from concurrent.futures import Executor
 from dataclasses import fields, replace
 from typing import Any, Literal
 
@@ -17,7 +17,7 @@ from ._blas import one_blas_thread
 from ._dispatch import two_axis_aware
 from ._excitation import Multisine
 from ._experiment import _plan, _window, automatic_settle
-from ._linear import AnyController, core_controller, is_controller, loop_poles, spectral_radius
+from ._linear import AnyController, _gain_arrays, core_controller, is_controller, loop_poles, spectral_radius
 from ._params import PID, Rig
 from ._sweep_result import OVERFLOW, STATUS, STATUS_NAMES, SWEPT, SweepResult, unit_of
 from ._validate import integer, require, rig_and_controller, seed_value
@@ -94,7 +94,7 @@ def point_model(
 def _run_chunk(
     rig: Rig | None, controller: AnyController | None, factory: Factory | None, excitation: Multisine,
     values: dict[str, np.ndarray], seeds: np.ndarray, periods: int, settle_periods: int | None, window: int,
-    workers: int, start: str = "steady", cancel: _core.CancelToken | None = None,
+    workers: int, start: str = "steady",
 ) -> dict[str, np.ndarray]:  # fmt: skip
     """One unit of work, for a thread or any executor (picklable arguments, numpy results): each
     point's rig and controller, the stability check (an unstable point is flagged, never simulated),
@@ -102,23 +102,29 @@ def _run_chunk(
     n = len(seeds)
     names = list(values)
     if factory is None and isinstance(controller, PID) and set(names) <= set(SWEPT):
-        # PID gains only: the closed loop is affine in them, so all radii come in one call.
+        # PID gains only: the closed loop is affine in them, so all radii come in one call, and the core's
+        # controllers are made from the gain arrays without a PID per point.
         assert rig is not None
-        radius = spectral_radius(rig, controller, **{name: values[name] for name in names})
-        gains: list[dict[str, Any]] = [{k: float(values[k][j]) for k in names} for j in range(n)]
-        models: list[tuple[Rig, AnyController]] = [(rig, replace(controller, **point)) for point in gains]
+        swept = {name: values[name] for name in names}
+        radius = spectral_radius(rig, controller, **swept)
+        rigs: list[Rig] = [rig] * n
+        controllers: list[AnyController] = [controller] * n  # what the settling rule reads: the same fs
+        gains = _gain_arrays(controller, swept.get("kp"), swept.get("ki"), swept.get("kd"))
+        core_controllers = controller._core_controllers(gains)
     else:
         models = [point_model(rig, controller, {k: float(values[k][j]) for k in names}, factory)  # type: ignore[arg-type]
                   for j in range(n)]  # fmt: skip
         radius = np.array([np.max(np.abs(loop_poles(r, c)), initial=0.0) for r, c in models])
+        rigs, controllers = [r for r, _ in models], [c for _, c in models]
+        core_controllers = [core_controller(c) for c in controllers]
     fs = excitation.fs
-    for _, c in models:
+    for c in controllers:
         require(c.fs == fs, "controller fs", c.fs, f"equal to the excitation's fs ({fs} Hz)")
     stable = radius < 1.0
     if settle_periods is None:  # the rule of run_experiment, so every point reruns bit for bit
         period = excitation.period_samples
         settle = np.array([automatic_settle(r, c, float(rad), period, start) if ok else 0
-                           for (r, c), rad, ok in zip(models, radius, stable)])  # fmt: skip
+                           for r, c, rad, ok in zip(rigs, controllers, radius, stable)])  # fmt: skip
     else:
         settle = np.full(n, settle_periods)
     plan, unexcited = _plan(excitation.harmonics, excitation.period_samples)
@@ -137,14 +143,14 @@ def _run_chunk(
     if not rows.size:
         unstable_until_run()
     else:
-        masses = {models[j][0].mass for j in rows}
+        masses = {rigs[j].mass for j in rows}
         require(len(masses) == 1, "mass", sorted(masses), "the same at every point of a sweep (kg)")
 
         def core_call(pick: np.ndarray):  # noqa: ANN202
             at = rows[pick]
-            return _core.run_sweep(excitation.samples, [models[j][0]._to_core() for j in at],
-                                   [core_controller(models[j][1]) for j in at], settle64[at],
-                                   seeds[at], periods, plan, window, workers, start == "steady", cancel)  # fmt: skip
+            return _core.run_sweep(excitation.samples, [rigs[j]._to_core() for j in at],
+                                   [core_controllers[j] for j in at], settle64[at],
+                                   seeds[at], periods, plan, window, workers, start == "steady")  # fmt: skip
 
         everything = np.arange(rows.size)
         overflowed: list[int] = []
@@ -168,7 +174,7 @@ def _run_chunk(
                     out[name][rows[pick]] = np.asarray(getattr(core, name))
             out["status"][overflowed] = STATUS_NAMES.index(OVERFLOW)
         for j in rows:  # no clearance to touch on the linear law: the state overflowed
-            point_rig = models[j][0]
+            point_rig = rigs[j]
             unbounded = point_rig.force_law == "linear" and point_rig.clearance is None
             if out["status"][j] == STATUS.index("touchdown") and unbounded:
                 out["status"][j] = STATUS_NAMES.index(OVERFLOW)
@@ -237,7 +243,7 @@ def sweep(
     settle_periods : int, optional
         Periods run before recording, with ``start="rest"`` (default: from the slowest pole, per point).
     workers : int, optional
-        Core threads per batched call (default: all cores here; one per chunk on an ``executor``).
+        Core threads per call (default: all cores here; one per chunk on an ``executor``).
     executor : concurrent.futures.Executor, optional
         Runs the chunks: threads, processes, or a dask cluster's ``client.get_executor()``.
     progress : bool, optional
@@ -262,13 +268,17 @@ def sweep(
     Notes
     -----
     Points whose linearised loop is unstable are flagged and not simulated; the rest run in a batched
-    C++ core (points with the same rig and controller shape run side by side in SIMD lanes), ``workers`` threads
-    per call, with the GIL released. Every point equals :func:`run_experiment` of that point bit for bit.
+    C++ core, ``workers`` threads per call, with the GIL released: from the steady start of a linear rig
+    without limits each point's spectra are drawn (as :func:`run_experiment` does), elsewhere points with
+    the same rig and controller shape run side by side in SIMD lanes. Every point equals
+    :func:`run_experiment` of that point bit for bit. A sweep of PID gains makes the core's controllers
+    from the gain arrays, without a :class:`PID` per point.
 
-    The grid is cut into chunks of ``chunk_size`` points (default: equal chunks, a multiple of the
-    number of workers, up to eight per worker and of at least 32 points where there are enough), each run
-    by the batched core: on ``workers`` threads here, or on ``executor`` (each chunk then uses
-    ``workers`` core threads, default one). Results come back in grid order.
+    Without an ``executor`` the grid runs here in one core call split across ``workers`` threads (with a
+    progress bar: about 20 calls, one per update). With one, it is cut into chunks of ``chunk_size``
+    points (default: equal chunks, a multiple of the number of workers, up to eight per worker and of at
+    least 32 points where there are enough), each run on the executor with ``workers`` core threads
+    (default one). ``chunk_size`` sets the calls' size either way. Results come back in grid order.
 
     See Also
     --------
@@ -318,56 +328,42 @@ def sweep(
     require(executor is None or callable(getattr(executor, "submit", None)), "executor", executor,
             "a concurrent.futures.Executor (with submit)")  # fmt: skip
     require(progress in (None, True, False), "progress", progress, "True, False or None")
-    if chunk_size is not None:
-        size = integer("chunk_size", chunk_size, 1)
-    else:  # equal work per thread: a multiple of `threads` chunks, up to eight each, of at least 32 points
+    size = integer("chunk_size", chunk_size, 1) if chunk_size is not None else 0
+    bar = _progress_bar(progress, n)
+    if not size and executor is None:  # one call for the grid, or ~20 for a progress bar (>= 32 points a thread)
+        size = n if bar is None else max(32 * threads, -(-n // 20))
+    elif not size:  # equal work per worker: a multiple of `threads` chunks, up to eight each, of at least 32 points
         count = min(8 * threads, max(1, -(-n // 32)))
         count = -(-count // threads) * threads
         size = -(-n // count)
     chunks = [np.arange(i, min(i + size, n)) for i in range(0, n, size)]
-    # Threads here (the core releases the GIL), or the executor's workers with `workers` core
-    # threads per chunk (default one).
-    core_threads = workers if (executor is not None and workers is not None) else 1
-    run_on: Executor = executor if executor is not None else ThreadPoolExecutor(threads)
     _, unexcited = _plan(excitation.harmonics, excitation.period_samples)
     results: dict[str, np.ndarray] = {}
-    bar = _progress_bar(progress, n)
-    # Chunks on our own threads stop between periods when the sweep is interrupted (Ctrl-C reaches
-    # this thread while it waits); an executor's workers finish their chunks.
-    cancel = _core.CancelToken() if executor is None else None
+
+    def chunk(rows: np.ndarray, core_threads: int) -> tuple:  # the arguments of one chunk's _run_chunk
+        return (base_rig, base_controller, factory, excitation, {name: values[rows] for name, values in points.items()},
+                seeds[rows], periods, settle_periods, window, core_threads, start)  # fmt: skip
+
+    def collect(rows: np.ndarray, part: dict[str, np.ndarray]) -> None:
+        for name, values in part.items():
+            if name not in results:
+                results[name] = np.empty((n, *values.shape[1:]), dtype=values.dtype)
+            results[name][rows] = values
+        if bar is not None:
+            bar.update(rows.size)
+
     try:
-        futures = [
-            run_on.submit(
-                _run_chunk,
-                base_rig,
-                base_controller,
-                factory,
-                excitation,
-                {name: values[rows] for name, values in points.items()},
-                seeds[rows],
-                periods,
-                settle_periods,
-                window,
-                core_threads,
-                start,
-                cancel,
-            )  # fmt: skip
-            for rows in chunks
-        ]
-        for rows, future in zip(chunks, futures):
-            for name, values in future.result().items():
-                if name not in results:
-                    results[name] = np.empty((n, *values.shape[1:]), dtype=values.dtype)
-                results[name][rows] = values
-            if bar is not None:
-                bar.update(rows.size)
-    except BaseException:
-        if cancel is not None:
-            cancel.cancel()
-        raise
-    finally:
         if executor is None:
-            run_on.shutdown(cancel_futures=True)
+            # Here, one chunk after another, each split across `threads` core threads (no Python threads
+            # to start, no GIL between the chunks' points); Ctrl-C reaches the core through this thread.
+            for rows in chunks:
+                collect(rows, _run_chunk(*chunk(rows, threads)))
+        else:  # each chunk on the executor's workers, with `workers` core threads (default one)
+            core_threads = workers if workers is not None else 1
+            futures = [executor.submit(_run_chunk, *chunk(rows, core_threads)) for rows in chunks]
+            for rows, future in zip(chunks, futures):
+                collect(rows, future.result())
+    finally:
         if bar is not None:
             bar.close()
     status = np.array(STATUS_NAMES)[results.pop("status")]

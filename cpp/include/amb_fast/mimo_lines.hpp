@@ -72,13 +72,16 @@ private:
 // and per solve, where a dense LU is O(n^3).
 class HessenbergLU {
 public:
-    HessenbergLU(const Eigen::MatrixXd& H, std::complex<double> z);
+    explicit HessenbergLU(const Eigen::MatrixXd& H);  // storage only: factor() before solving
+    HessenbergLU(const Eigen::MatrixXd& H, std::complex<double> z) : HessenbergLU(H) { factor(z); }
+    void factor(std::complex<double> z);  // for another z, in the same storage
     void solve(std::complex<double>* x) const;             // (zI - H) x = b, b in x
     void solve_transposed(std::complex<double>* x) const;  // (zI - H)^T x = b, b in x
 
 private:
     Eigen::Index n_;
-    Eigen::MatrixXcd U_;
+    Eigen::MatrixXd H_;
+    Eigen::Matrix<std::complex<double>, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> U_;
     std::vector<std::complex<double>> inverse_diagonal_;
     std::vector<std::complex<double>> multiplier_;  // step j: row j + 1 -= multiplier_[j] row j
     std::vector<char> swapped_;                     // step j swapped rows j and j + 1 first
