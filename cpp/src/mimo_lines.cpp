@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <cstring>
+#include <mutex>
 #include <stdexcept>
 
 #include "amb_fast/errors.hpp"
@@ -258,26 +259,33 @@ void SteadyLines::start(const double* period_force, std::uint64_t seed) {
     const auto B = static_cast<Eigen::Index>(bins_.size());
     require_finite_samples("excitation", period_force, L_ * p);
     // The forces' lines, the probes' periodic response to them, the recorded (transduced) force lines.
-    // The last channel transformed on this thread, kept: a sweep's points and repeated experiments share
-    // their excitation, and comparing it costs a twentieth of its transform.
-    thread_local struct {
+    // The last channel transformed (on any thread), kept: a sweep's points and repeated experiments
+    // share their excitation, and comparing it costs a twentieth of its transform.
+    static std::mutex guard;
+    static struct {
         std::vector<double> samples;
         std::vector<Eigen::Index> bins;
         std::vector<cd> lines;
     } last;
     std::vector<double> channel(static_cast<std::size_t>(L_));
+    std::vector<cd> spectrum(static_cast<std::size_t>(B));
     Eigen::MatrixXcd F(B, p);
     for (Eigen::Index c = 0; c < p; ++c) {
         for (Eigen::Index k = 0; k < L_; ++k) channel[static_cast<std::size_t>(k)] = period_force[k * p + c];
-        const bool same = last.samples.size() == channel.size() && bins_ == last.bins &&
-                          std::memcmp(channel.data(), last.samples.data(), channel.size() * sizeof(double)) == 0;
-        if (!same) {  // bitwise: the transform of the very same samples
-            last.lines.resize(static_cast<std::size_t>(B));
-            transform_(channel.data(), last.lines.data());
+        bool same = false;
+        {
+            const std::lock_guard<std::mutex> lock(guard);
+            same = last.samples.size() == channel.size() && bins_ == last.bins &&
+                   std::memcmp(channel.data(), last.samples.data(), channel.size() * sizeof(double)) == 0;
+            if (same) spectrum = last.lines;  // bitwise the same samples: their transform
+        }
+        if (!same) {
+            transform_(channel.data(), spectrum.data());
+            const std::lock_guard<std::mutex> lock(guard);
             last.samples = channel;
             last.bins = bins_;
+            last.lines = spectrum;
         }
-        const std::vector<cd>& spectrum = last.lines;
         const double a = model_.transducer_pole[c];
         for (Eigen::Index k = 0; k < B; ++k) {
             const cd zk = z_[static_cast<std::size_t>(k)];

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -19,13 +20,17 @@ constexpr double two_pi = 6.283185307179586;
 using cd = std::complex<double>;
 using RealPlan = pocketfft::detail::pocketfft_r<double>;
 
-// One plan per thread and length, shared by the thread's estimators (exec is const and allocates its
-// own scratch): a sweep's 32 lanes pay for one set of twiddles.
+// The plans of the last few lengths, shared by every estimator on every thread (exec is const and
+// allocates its own scratch): a sweep's points and threads pay for one set of twiddles.
 std::shared_ptr<const RealPlan> real_plan(Eigen::Index L) {
-    thread_local std::shared_ptr<const RealPlan> last;
-    if (!last || static_cast<Eigen::Index>(last->length()) != L)
-        last = std::make_shared<const RealPlan>(static_cast<std::size_t>(L));
-    return last;
+    static std::mutex guard;
+    static std::vector<std::shared_ptr<const RealPlan>> recent;
+    const std::lock_guard<std::mutex> lock(guard);
+    for (const auto& plan : recent)
+        if (static_cast<Eigen::Index>(plan->length()) == L) return plan;
+    if (recent.size() == 4) recent.erase(recent.begin());
+    recent.push_back(std::make_shared<const RealPlan>(static_cast<std::size_t>(L)));
+    return recent.back();
 }
 
 #ifndef POCKETFFT_NO_VECTORS
