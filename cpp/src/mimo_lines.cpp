@@ -16,71 +16,152 @@ namespace amb_fast {
 
 using cd = std::complex<double>;
 
-namespace {
-// 1 / x without the library's scaled division (x is a pivot of a well-conditioned matrix).
-cd reciprocal(cd x) { return std::conj(x) / std::norm(x); }
-}  // namespace
+// Lane loops: every lane's arithmetic is the same sequence, written out per lane so that it vectorises.
+#define AMB_FAST_LANES for (int l = 0; l < lanes; ++l)
 
 HessenbergLU::HessenbergLU(const Eigen::MatrixXd& H)
     : n_(H.rows()),
       H_(H),
-      U_(n_, n_),
-      inverse_diagonal_(static_cast<std::size_t>(n_)),
-      multiplier_(static_cast<std::size_t>(std::max<Eigen::Index>(n_ - 1, 0))),
-      swapped_(multiplier_.size(), 0) {}
+      ur_(static_cast<std::size_t>(n_ * n_ * lanes)),
+      ui_(ur_.size()),
+      dr_(static_cast<std::size_t>(n_ * lanes)),
+      di_(dr_.size()),
+      mr_(dr_.size()),
+      mi_(dr_.size()),
+      swapped_(dr_.size()) {}
 
-void HessenbergLU::factor(cd z) {
-    // Plain loops over the row-major factor: rows of a few entries, where Eigen's segment expressions
-    // cost more than the arithmetic.
+void HessenbergLU::factor(const cd* z) {
     const Eigen::Index n = n_;
-    cd* U = U_.data();
+    double *ur = ur_.data(), *ui = ui_.data();
     for (Eigen::Index i = 0; i < n; ++i)
-        for (Eigen::Index c = 0; c < n; ++c) U[i * n + c] = -H_(i, c);
-    for (Eigen::Index i = 0; i < n; ++i) U[i * n + i] += z;
-    for (Eigen::Index j = 0; j < n; ++j) {
-        cd* row = U + j * n;
-        cd* below = row + n;
-        if (j + 1 < n) {
-            const bool swap = std::norm(below[j]) > std::norm(row[j]);
-            swapped_[static_cast<std::size_t>(j)] = swap;
-            if (swap)
-                for (Eigen::Index c = j; c < n; ++c) std::swap(row[c], below[c]);
+        for (Eigen::Index c = 0; c < n; ++c) {
+            const double h = -H_(i, c);
+            const Eigen::Index at = (i * n + c) * lanes;
+            AMB_FAST_LANES {
+                ur[at + l] = h;
+                ui[at + l] = 0.0;
+            }
         }
-        if (row[j] == 0.0) throw std::invalid_argument("zI - H is singular: z is a pole of the loop");
-        inverse_diagonal_[static_cast<std::size_t>(j)] = reciprocal(row[j]);
+    for (Eigen::Index i = 0; i < n; ++i) {
+        const Eigen::Index at = (i * n + i) * lanes;
+        AMB_FAST_LANES {
+            ur[at + l] += z[l].real();
+            ui[at + l] = z[l].imag();
+        }
+    }
+    for (Eigen::Index j = 0; j < n; ++j) {
+        double *rr = ur + j * n * lanes, *ri = ui + j * n * lanes;  // row j
+        double *br = rr + n * lanes, *bi = ri + n * lanes;          // row j + 1
+        double* swap = swapped_.data() + j * lanes;
+        if (j + 1 < n) {
+            AMB_FAST_LANES {
+                const double below = br[j * lanes + l] * br[j * lanes + l] + bi[j * lanes + l] * bi[j * lanes + l];
+                const double here = rr[j * lanes + l] * rr[j * lanes + l] + ri[j * lanes + l] * ri[j * lanes + l];
+                swap[l] = below > here ? 1.0 : 0.0;
+            }
+            for (Eigen::Index c = j; c < n; ++c)
+                AMB_FAST_LANES {
+                    const Eigen::Index at = c * lanes + l;
+                    const bool s = swap[l] != 0.0;
+                    const double ar = rr[at], ai = ri[at], cr = br[at], ci = bi[at];
+                    rr[at] = s ? cr : ar, ri[at] = s ? ci : ai;
+                    br[at] = s ? ar : cr, bi[at] = s ? ai : ci;
+                }
+        }
+        double *inv_r = dr_.data() + j * lanes, *inv_i = di_.data() + j * lanes;
+        bool singular = false;
+        AMB_FAST_LANES {  // 1 / x = conj(x) / |x|^2 (a pivot of a well-conditioned matrix: no scaling)
+            const double a = rr[j * lanes + l], b = ri[j * lanes + l], norm = a * a + b * b;
+            singular |= norm == 0.0;
+            inv_r[l] = a / norm;
+            inv_i[l] = -b / norm;
+        }
+        if (singular) throw std::invalid_argument("zI - H is singular: z is a pole of the loop");
         if (j + 1 == n) break;
-        const cd l = below[j] * inverse_diagonal_[static_cast<std::size_t>(j)];
-        multiplier_[static_cast<std::size_t>(j)] = l;
-        for (Eigen::Index c = j + 1; c < n; ++c) below[c] -= l * row[c];
-        below[j] = 0.0;
+        double *m_r = mr_.data() + j * lanes, *m_i = mi_.data() + j * lanes;
+        AMB_FAST_LANES {
+            const double a = br[j * lanes + l], b = bi[j * lanes + l];
+            m_r[l] = a * inv_r[l] - b * inv_i[l];
+            m_i[l] = a * inv_i[l] + b * inv_r[l];
+            br[j * lanes + l] = bi[j * lanes + l] = 0.0;
+        }
+        for (Eigen::Index c = j + 1; c < n; ++c)
+            AMB_FAST_LANES {
+                const Eigen::Index at = c * lanes + l;
+                const double a = rr[at], b = ri[at];
+                br[at] -= m_r[l] * a - m_i[l] * b;
+                bi[at] -= m_r[l] * b + m_i[l] * a;
+            }
     }
 }
 
-void HessenbergLU::solve(cd* x) const {
-    for (Eigen::Index j = 0; j + 1 < n_; ++j) {
-        if (swapped_[static_cast<std::size_t>(j)]) std::swap(x[j], x[j + 1]);
-        x[j + 1] -= multiplier_[static_cast<std::size_t>(j)] * x[j];
+void HessenbergLU::solve(double* re, double* im) const {
+    const Eigen::Index n = n_;
+    for (Eigen::Index j = 0; j + 1 < n; ++j) {  // the row operations: swaps and eliminations
+        const double *swap = swapped_.data() + j * lanes, *m_r = mr_.data() + j * lanes, *m_i = mi_.data() + j * lanes;
+        double *xr = re + j * lanes, *xi = im + j * lanes;
+        AMB_FAST_LANES {
+            const bool s = swap[l] != 0.0;
+            const double ar = xr[l], ai = xi[l], cr = xr[lanes + l], ci = xi[lanes + l];
+            const double top_r = s ? cr : ar, top_i = s ? ci : ai, low_r = s ? ar : cr, low_i = s ? ai : ci;
+            xr[l] = top_r, xi[l] = top_i;
+            xr[lanes + l] = low_r - (m_r[l] * top_r - m_i[l] * top_i);
+            xi[lanes + l] = low_i - (m_r[l] * top_i + m_i[l] * top_r);
+        }
     }
-    for (Eigen::Index i = n_ - 1; i >= 0; --i) {
-        cd sum = x[i];
-        const cd* row = U_.data() + i * n_;
-        for (Eigen::Index c = i + 1; c < n_; ++c) sum -= row[c] * x[c];
-        x[i] = sum * inverse_diagonal_[static_cast<std::size_t>(i)];
+    for (Eigen::Index i = n - 1; i >= 0; --i) {  // back substitution with U
+        double sr[lanes], si[lanes];
+        AMB_FAST_LANES sr[l] = re[i * lanes + l], si[l] = im[i * lanes + l];
+        for (Eigen::Index c = i + 1; c < n; ++c) {
+            const double *u_r = ur_.data() + (i * n + c) * lanes, *u_i = ui_.data() + (i * n + c) * lanes;
+            AMB_FAST_LANES {
+                const double a = re[c * lanes + l], b = im[c * lanes + l];
+                sr[l] -= u_r[l] * a - u_i[l] * b;
+                si[l] -= u_r[l] * b + u_i[l] * a;
+            }
+        }
+        const double *inv_r = dr_.data() + i * lanes, *inv_i = di_.data() + i * lanes;
+        AMB_FAST_LANES {
+            re[i * lanes + l] = sr[l] * inv_r[l] - si[l] * inv_i[l];
+            im[i * lanes + l] = sr[l] * inv_i[l] + si[l] * inv_r[l];
+        }
     }
 }
 
-void HessenbergLU::solve_transposed(cd* x) const {
-    for (Eigen::Index i = 0; i < n_; ++i) {  // U^T t = b
-        cd sum = x[i];
-        const cd* column = U_.data() + i;
-        for (Eigen::Index k = 0; k < i; ++k) sum -= column[k * n_] * x[k];
-        x[i] = sum * inverse_diagonal_[static_cast<std::size_t>(i)];
+void HessenbergLU::solve_transposed(double* re, double* im) const {
+    const Eigen::Index n = n_;
+    for (Eigen::Index i = 0; i < n; ++i) {  // U^T t = b
+        double sr[lanes], si[lanes];
+        AMB_FAST_LANES sr[l] = re[i * lanes + l], si[l] = im[i * lanes + l];
+        for (Eigen::Index k = 0; k < i; ++k) {
+            const double *u_r = ur_.data() + (k * n + i) * lanes, *u_i = ui_.data() + (k * n + i) * lanes;
+            AMB_FAST_LANES {
+                const double a = re[k * lanes + l], b = im[k * lanes + l];
+                sr[l] -= u_r[l] * a - u_i[l] * b;
+                si[l] -= u_r[l] * b + u_i[l] * a;
+            }
+        }
+        const double *inv_r = dr_.data() + i * lanes, *inv_i = di_.data() + i * lanes;
+        AMB_FAST_LANES {
+            re[i * lanes + l] = sr[l] * inv_r[l] - si[l] * inv_i[l];
+            im[i * lanes + l] = sr[l] * inv_i[l] + si[l] * inv_r[l];
+        }
     }
-    for (Eigen::Index j = n_ - 2; j >= 0; --j) {  // then the row operations transposed, last first
-        x[j] -= multiplier_[static_cast<std::size_t>(j)] * x[j + 1];
-        if (swapped_[static_cast<std::size_t>(j)]) std::swap(x[j], x[j + 1]);
+    for (Eigen::Index j = n - 2; j >= 0; --j) {  // then the row operations transposed, last first
+        const double *swap = swapped_.data() + j * lanes, *m_r = mr_.data() + j * lanes, *m_i = mi_.data() + j * lanes;
+        double *xr = re + j * lanes, *xi = im + j * lanes;
+        AMB_FAST_LANES {
+            const double ar = xr[l] - (m_r[l] * xr[lanes + l] - m_i[l] * xi[lanes + l]);
+            const double ai = xi[l] - (m_r[l] * xi[lanes + l] + m_i[l] * xr[lanes + l]);
+            const double cr = xr[lanes + l], ci = xi[lanes + l];
+            const bool s = swap[l] != 0.0;
+            xr[l] = s ? cr : ar, xi[l] = s ? ci : ai;
+            xr[lanes + l] = s ? ar : cr, xi[lanes + l] = s ? ai : ci;
+        }
     }
 }
+
+#undef AMB_FAST_LANES
 
 namespace {
 constexpr double pi = 3.14159265358979323846;
@@ -202,30 +283,51 @@ SteadyLines::SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eig
     CRz_im_.resize(B * q, n);
     Xn_.resize(n, 2 * B * q);
     z_.resize(static_cast<std::size_t>(B));
-    Eigen::MatrixXcd CR(q, n);
-    Eigen::VectorXcd x(n);
+    for (Eigen::Index k = 0; k < B; ++k)
+        z_[static_cast<std::size_t>(k)] = std::polar(
+            1.0, 2.0 * pi * static_cast<double>(bins_[static_cast<std::size_t>(k)]) / static_cast<double>(L));
+    // Four lines at a time (the last group padded with its last line), each lane's solutions copied out.
+    constexpr int lanes = HessenbergLU::lanes;
     HessenbergLU lu(H);
-    for (Eigen::Index k = 0; k < B; ++k) {
-        if (k % 64 == 0) poll_interrupt();
-        const cd zk = std::polar(1.0, 2.0 * pi * static_cast<double>(bins_[static_cast<std::size_t>(k)]) /
-                                          static_cast<double>(L));
-        z_[static_cast<std::size_t>(k)] = zk;
-        lu.factor(zk);
+    std::vector<double> re(static_cast<std::size_t>(n * lanes)), im(re.size());
+    const auto load = [&](const auto& b) {  // the same right-hand side in every lane
+        for (Eigen::Index i = 0; i < n; ++i)
+            for (int l = 0; l < lanes; ++l)
+                re[static_cast<std::size_t>(i * lanes + l)] = b[i].real(), im[static_cast<std::size_t>(i * lanes + l)] = b[i].imag();
+    };
+    std::vector<Eigen::MatrixXcd> CR(lanes, Eigen::MatrixXcd(q, n));
+    for (Eigen::Index k0 = 0; k0 < B; k0 += lanes) {
+        if (k0 % 64 == 0) poll_interrupt();
+        const Eigen::Index count = std::min<Eigen::Index>(lanes, B - k0);
+        cd shifts[lanes];
+        for (int l = 0; l < lanes; ++l) shifts[l] = z_[static_cast<std::size_t>(k0 + std::min<Eigen::Index>(l, count - 1))];
+        lu.factor(shifts);
         for (Eigen::Index j = 0; j < q; ++j) {
-            x = Bt.col(p + j);
-            lu.solve(x.data());
-            Xn_.col(2 * (k * q + j)) = x.real();
-            Xn_.col(2 * (k * q + j) + 1) = -x.imag();
+            load(Bt.col(p + j));
+            lu.solve(re.data(), im.data());
+            for (Eigen::Index l = 0; l < count; ++l)
+                for (Eigen::Index i = 0; i < n; ++i) {
+                    Xn_(i, 2 * ((k0 + l) * q + j)) = re[static_cast<std::size_t>(i * lanes + l)];
+                    Xn_(i, 2 * ((k0 + l) * q + j) + 1) = -im[static_cast<std::size_t>(i * lanes + l)];
+                }
         }
         for (Eigen::Index i = 0; i < q; ++i) {
-            x = Ct.row(i).transpose();
-            lu.solve_transposed(x.data());
-            CR.row(i) = x.transpose();
+            load(Ct.row(i));
+            lu.solve_transposed(re.data(), im.data());
+            for (Eigen::Index l = 0; l < count; ++l)
+                for (Eigen::Index c = 0; c < n; ++c)
+                    CR[static_cast<std::size_t>(l)](i, c) = {re[static_cast<std::size_t>(c * lanes + l)],
+                                                             im[static_cast<std::size_t>(c * lanes + l)]};
         }
-        G_.middleCols(k * m, m).noalias() = CR.lazyProduct(Bt);  // tiny: no blocked product
-        G_.middleCols(k * m + p, q) += Dn;
-        CRz_re_.middleRows(k * q, q) = (zk * CR).real();
-        CRz_im_.middleRows(k * q, q) = (zk * CR).imag();
+        for (Eigen::Index l = 0; l < count; ++l) {
+            const Eigen::Index k = k0 + l;
+            const cd zk = z_[static_cast<std::size_t>(k)];
+            const Eigen::MatrixXcd& R = CR[static_cast<std::size_t>(l)];
+            G_.middleCols(k * m, m).noalias() = R.lazyProduct(Bt);  // tiny: no blocked product
+            G_.middleCols(k * m + p, q) += Dn;
+            CRz_re_.middleRows(k * q, q) = (zk * R).real();
+            CRz_im_.middleRows(k * q, q) = (zk * R).imag();
+        }
     }
     // The noise's state: stationary covariance P; over a period w = zL - M^L z0 has covariance
     // P - M^L P M^LT, of which the lines' spectra explain (2 / L) sum sigma^2 Re(S S^H), S = W Xn.

@@ -459,18 +459,36 @@ int main() {
         const Eigen::HessenbergDecomposition<Eigen::MatrixXd> hd(M);
         const Eigen::MatrixXd H = hd.matrixH();
         double worst = 0.0;
-        for (const std::complex<double> z : {std::complex<double>(0.3, 0.9), std::complex<double>(-1.0, 0.0),
-                                             std::complex<double>(0.01, -0.02)}) {
-            const HessenbergLU lu(H, z);
+        // Four shifts at once, and each again in another lane beside other shifts: the same digits.
+        const std::complex<double> shifts[4] = {{0.3, 0.9}, {-1.0, 0.0}, {0.01, -0.02}, {0.7, -0.4}};
+        const std::complex<double> rotated[4] = {shifts[3], shifts[0], shifts[1], shifts[2]};
+        HessenbergLU lu(H), other(H);
+        lu.factor(shifts);
+        other.factor(rotated);
+        Eigen::VectorXcd b(n);
+        for (Eigen::Index i = 0; i < n; ++i) b[i] = std::complex<double>(std::cos(static_cast<double>(i)), 0.5 * static_cast<double>(i));
+        std::vector<double> xr(n * 4), xi(n * 4), yr(n * 4), yi(n * 4), xr2(n * 4), xi2(n * 4);
+        for (Eigen::Index i = 0; i < n; ++i)
+            for (int l = 0; l < 4; ++l) xr[i * 4 + l] = yr[i * 4 + l] = b[i].real(), xi[i * 4 + l] = yi[i * 4 + l] = b[i].imag();
+        xr2 = xr, xi2 = xi;
+        lu.solve(xr.data(), xi.data());
+        lu.solve_transposed(yr.data(), yi.data());
+        other.solve(xr2.data(), xi2.data());
+        bool same_in_any_lane = true;
+        for (int l = 0; l < 4; ++l) {
+            const std::complex<double> z = shifts[l];
             const Eigen::MatrixXcd A = z * Eigen::MatrixXcd::Identity(n, n) - H.cast<std::complex<double>>();
-            Eigen::VectorXcd b(n);
-            for (Eigen::Index i = 0; i < n; ++i) b[i] = std::complex<double>(std::cos(static_cast<double>(i)), 0.5 * static_cast<double>(i));
-            Eigen::VectorXcd x = b, y = b;
-            lu.solve(x.data());
-            lu.solve_transposed(y.data());
             const Eigen::VectorXcd want_x = A.partialPivLu().solve(b), want_y = A.transpose().partialPivLu().solve(b);
+            Eigen::VectorXcd x(n), y(n);
+            for (Eigen::Index i = 0; i < n; ++i) {
+                x[i] = {xr[i * 4 + l], xi[i * 4 + l]};
+                y[i] = {yr[i * 4 + l], yi[i * 4 + l]};
+                const int moved = (l + 1) % 4;  // shift l sits in lane l + 1 of `other`
+                same_in_any_lane = same_in_any_lane && xr2[i * 4 + moved] == xr[i * 4 + l] && xi2[i * 4 + moved] == xi[i * 4 + l];
+            }
             worst = std::max({worst, (x - want_x).norm() / want_x.norm(), (y - want_y).norm() / want_y.norm()});
         }
+        check(same_in_any_lane, "Hessenberg LU: a shift's solution does not depend on its lane");
         check(worst < 1e-12, "Hessenberg LU solves equal dense LU (" + std::to_string(worst) + ")");
     }
 

@@ -68,23 +68,28 @@ private:
     Eigen::VectorXd z0_, zL_, draws_, d_, v_, change_re_, change_im_;
 };
 
-// LU factors of zI - H for an upper Hessenberg H, pivoting between neighbouring rows: O(n^2) to factor
-// and per solve, where a dense LU is O(n^3).
+// LU factors of z_l I - H for an upper Hessenberg H and four shifts z_l at once (lane l), each
+// pivoting between neighbouring rows on its own: O(n^2) to factor and per solve, where a dense LU is
+// O(n^3). The four lanes' numbers sit side by side (real and imaginary parts apart), so the compiler runs
+// the lanes in SIMD registers and the latency-bound chains of one solve overlap; every lane gets the
+// operations it would get alone, whichever lanes it shares.
 class HessenbergLU {
 public:
+    static constexpr int lanes = 4;
     explicit HessenbergLU(const Eigen::MatrixXd& H);  // storage only: factor() before solving
-    HessenbergLU(const Eigen::MatrixXd& H, std::complex<double> z) : HessenbergLU(H) { factor(z); }
-    void factor(std::complex<double> z);  // for another z, in the same storage
-    void solve(std::complex<double>* x) const;             // (zI - H) x = b, b in x
-    void solve_transposed(std::complex<double>* x) const;  // (zI - H)^T x = b, b in x
+    void factor(const std::complex<double>* z);        // z[0..lanes): the shifts
+    // (z_l I - H) x_l = b_l in place; x_l's entry i at re[i * lanes + l], im[i * lanes + l].
+    void solve(double* re, double* im) const;
+    void solve_transposed(double* re, double* im) const;  // (z_l I - H)^T x_l = b_l
+    Eigen::Index size() const { return n_; }
 
 private:
     Eigen::Index n_;
-    Eigen::MatrixXd H_;
-    Eigen::Matrix<std::complex<double>, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> U_;
-    std::vector<std::complex<double>> inverse_diagonal_;
-    std::vector<std::complex<double>> multiplier_;  // step j: row j + 1 -= multiplier_[j] row j
-    std::vector<char> swapped_;                     // step j swapped rows j and j + 1 first
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> H_;
+    std::vector<double> ur_, ui_;  // U, row-major, lane-minor: [(i * n + c) * lanes + l]
+    std::vector<double> dr_, di_;  // 1 / U(j, j) per lane: [j * lanes + l]
+    std::vector<double> mr_, mi_;  // step j: row j + 1 -= m_j row j
+    std::vector<double> swapped_;  // step j swapped rows j and j + 1 first (1) or not (0)
 };
 
 // The 2x2 estimate H = F Y^-1 per line from both experiments' per-period line spectra, laid out as
