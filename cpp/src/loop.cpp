@@ -506,7 +506,7 @@ void Loop::start_periodic_from(const Loop& probe, Eigen::Index L) {
         NormalStream draws(start_noise_seed(seed_));
         Eigen::VectorXd w(z.size());
         draws.fill(w.data(), w.size(), 1.0);
-        z += stationary_noise_root(map.M, map.noise_in, rig_.sensor_noise) * w;
+        z += covariance_root(stationary_covariance(map.M, map.noise_in, Eigen::VectorXd::Constant(1, rig_.sensor_noise))) * w;
     }
     set_stacked_state(z);
     transducer_.set_state(periodic_transducer_start(transducer_.pole(), L, probe.transducer_.state()));

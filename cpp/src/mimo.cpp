@@ -378,10 +378,10 @@ void MimoLoop::start_periodic(const double* const* period_force, Eigen::Index L)
     probe.run(period_force, L, rec_ptr.data(), out_ptr.data());
     // M^L once for every lane (the solve is cheap beside it).
     const auto lu = (Eigen::MatrixXd::Identity(ns, ns) - matrix_power(model_.M, L)).partialPivLu();
-    const std::vector<Eigen::MatrixXd> roots = probe_noise_roots(model_);
+    const Eigen::MatrixXd root = covariance_root(stationary_noise_covariance(model_));
     for (Eigen::Index l = 0; l < lanes_; ++l) {
         Eigen::VectorXd z = lu.solve(probe.state(l));
-        add_stationary_noise(roots, seeds_[l], z);
+        add_stationary_noise(root, seeds_[l], z);
         for (Eigen::Index i = 0; i < ns; ++i) set_state(i, l, z[i]);
         for (Eigen::Index j = 0; j < p; ++j) {
             const double a = model_.transducer_pole[j];
@@ -390,21 +390,15 @@ void MimoLoop::start_periodic(const double* const* period_force, Eigen::Index L)
     }
 }
 
-std::vector<Eigen::MatrixXd> probe_noise_roots(const MimoModel& model) {
-    std::vector<Eigen::MatrixXd> roots;
-    for (Eigen::Index j = 0; j < model.probes(); ++j)
-        if (model.sensor_noise[j] > 0.0)
-            roots.push_back(stationary_noise_root(model.M, model.Bn.col(j), model.sensor_noise[j]));
-    return roots;
+Eigen::MatrixXd stationary_noise_covariance(const MimoModel& model) {
+    return stationary_covariance(model.M, model.Bn, model.sensor_noise);
 }
 
-void add_stationary_noise(const std::vector<Eigen::MatrixXd>& roots, std::uint64_t seed, Eigen::VectorXd& z) {
+void add_stationary_noise(const Eigen::MatrixXd& root, std::uint64_t seed, Eigen::VectorXd& z) {
     NormalStream draws(start_noise_seed(seed));
     Eigen::VectorXd v(z.size());
-    for (const auto& root : roots) {
-        draws.fill(v.data(), z.size(), 1.0);
-        z += root * v;
-    }
+    draws.fill(v.data(), z.size(), 1.0);
+    z += root * v;
 }
 
 void mimo_simulate(const MimoModel& model, const double* force, Eigen::Index n, std::uint64_t seed, double* recorded,

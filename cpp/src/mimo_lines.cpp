@@ -1,6 +1,6 @@
 #include "amb_fast/mimo_lines.hpp"
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Eigenvalues>  // HessenbergDecomposition
 #include <cmath>
 #include <cstring>
 #include <mutex>
@@ -16,8 +16,18 @@ namespace amb_fast {
 
 using cd = std::complex<double>;
 
-// Lane loops: every lane's arithmetic is the same sequence, written out per lane so that it vectorises.
-#define AMB_FAST_LANES for (int l = 0; l < lanes; ++l)
+namespace {
+// One number of every lane (shift): Eigen's fixed-size arrays, which compile to whole SIMD registers.
+using Shifted = Eigen::Array<double, HessenbergLU::lanes, 1>;
+using ShiftedAt = Eigen::Map<Shifted>;
+using ConstShiftedAt = Eigen::Map<const Shifted>;
+
+// a -= m b, complex, lane by lane (real and imaginary parts apart).
+inline void subtract_product(ShiftedAt ar, ShiftedAt ai, const Shifted& mr, const Shifted& mi, const Shifted& br, const Shifted& bi) {
+    ar -= mr * br - mi * bi;
+    ai -= mr * bi + mi * br;
+}
+}  // namespace
 
 HessenbergLU::HessenbergLU(const Eigen::MatrixXd& H)
     : n_(H.rows()),
@@ -32,136 +42,96 @@ HessenbergLU::HessenbergLU(const Eigen::MatrixXd& H)
 
 void HessenbergLU::factor(const cd* z) {
     const Eigen::Index n = n_;
-    double *ur = ur_.data(), *ui = ui_.data();
+    const auto U_r = [&](Eigen::Index i, Eigen::Index c) { return ShiftedAt(ur_.data() + (i * n + c) * lanes); };
+    const auto U_i = [&](Eigen::Index i, Eigen::Index c) { return ShiftedAt(ui_.data() + (i * n + c) * lanes); };
+    Shifted zr, zi;
+    for (int l = 0; l < lanes; ++l) zr[l] = z[l].real(), zi[l] = z[l].imag();
     for (Eigen::Index i = 0; i < n; ++i)
         for (Eigen::Index c = 0; c < n; ++c) {
-            const double h = -H_(i, c);
-            const Eigen::Index at = (i * n + c) * lanes;
-            AMB_FAST_LANES {
-                ur[at + l] = h;
-                ui[at + l] = 0.0;
-            }
+            U_r(i, c).setConstant(-H_(i, c));
+            U_i(i, c).setZero();
         }
     for (Eigen::Index i = 0; i < n; ++i) {
-        const Eigen::Index at = (i * n + i) * lanes;
-        AMB_FAST_LANES {
-            ur[at + l] += z[l].real();
-            ui[at + l] = z[l].imag();
-        }
+        U_r(i, i) += zr;
+        U_i(i, i) = zi;
     }
     for (Eigen::Index j = 0; j < n; ++j) {
-        double *rr = ur + j * n * lanes, *ri = ui + j * n * lanes;  // row j
-        double *br = rr + n * lanes, *bi = ri + n * lanes;          // row j + 1
-        double* swap = swapped_.data() + j * lanes;
-        if (j + 1 < n) {
-            AMB_FAST_LANES {
-                const double below = br[j * lanes + l] * br[j * lanes + l] + bi[j * lanes + l] * bi[j * lanes + l];
-                const double here = rr[j * lanes + l] * rr[j * lanes + l] + ri[j * lanes + l] * ri[j * lanes + l];
-                swap[l] = below > here ? 1.0 : 0.0;
+        if (j + 1 < n) {  // pivot: the larger of rows j and j + 1 in column j, lane by lane
+            const auto swap = (U_r(j + 1, j).square() + U_i(j + 1, j).square() >
+                               U_r(j, j).square() + U_i(j, j).square()).eval();
+            ShiftedAt(swapped_.data() + j * lanes) = swap.cast<double>();
+            for (Eigen::Index c = j; c < n; ++c) {
+                const Shifted ar = U_r(j, c), ai = U_i(j, c), br = U_r(j + 1, c), bi = U_i(j + 1, c);
+                U_r(j, c) = swap.select(br, ar), U_i(j, c) = swap.select(bi, ai);
+                U_r(j + 1, c) = swap.select(ar, br), U_i(j + 1, c) = swap.select(ai, bi);
             }
-            for (Eigen::Index c = j; c < n; ++c)
-                AMB_FAST_LANES {
-                    const Eigen::Index at = c * lanes + l;
-                    const bool s = swap[l] != 0.0;
-                    const double ar = rr[at], ai = ri[at], cr = br[at], ci = bi[at];
-                    rr[at] = s ? cr : ar, ri[at] = s ? ci : ai;
-                    br[at] = s ? ar : cr, bi[at] = s ? ai : ci;
-                }
         }
-        double *inv_r = dr_.data() + j * lanes, *inv_i = di_.data() + j * lanes;
-        bool singular = false;
-        AMB_FAST_LANES {  // 1 / x = conj(x) / |x|^2 (a pivot of a well-conditioned matrix: no scaling)
-            const double a = rr[j * lanes + l], b = ri[j * lanes + l], norm = a * a + b * b;
-            singular |= norm == 0.0;
-            inv_r[l] = a / norm;
-            inv_i[l] = -b / norm;
-        }
-        if (singular) throw std::invalid_argument("zI - H is singular: z is a pole of the loop");
+        // 1 / x = conj(x) / |x|^2 (a pivot of a well-conditioned matrix: no scaling)
+        const Shifted a = U_r(j, j), b = U_i(j, j), norm = a.square() + b.square();
+        if ((norm == 0.0).any()) throw std::invalid_argument("zI - H is singular: z is a pole of the loop");
+        const Shifted inv_r = a / norm, inv_i = -b / norm;
+        ShiftedAt(dr_.data() + j * lanes) = inv_r;
+        ShiftedAt(di_.data() + j * lanes) = inv_i;
         if (j + 1 == n) break;
-        double *m_r = mr_.data() + j * lanes, *m_i = mi_.data() + j * lanes;
-        AMB_FAST_LANES {
-            const double a = br[j * lanes + l], b = bi[j * lanes + l];
-            m_r[l] = a * inv_r[l] - b * inv_i[l];
-            m_i[l] = a * inv_i[l] + b * inv_r[l];
-            br[j * lanes + l] = bi[j * lanes + l] = 0.0;
-        }
-        for (Eigen::Index c = j + 1; c < n; ++c)
-            AMB_FAST_LANES {
-                const Eigen::Index at = c * lanes + l;
-                const double a = rr[at], b = ri[at];
-                br[at] -= m_r[l] * a - m_i[l] * b;
-                bi[at] -= m_r[l] * b + m_i[l] * a;
-            }
+        const Shifted lr = U_r(j + 1, j), li = U_i(j + 1, j);
+        const Shifted m_r = lr * inv_r - li * inv_i, m_i = lr * inv_i + li * inv_r;
+        ShiftedAt(mr_.data() + j * lanes) = m_r;
+        ShiftedAt(mi_.data() + j * lanes) = m_i;
+        U_r(j + 1, j).setZero();
+        U_i(j + 1, j).setZero();
+        for (Eigen::Index c = j + 1; c < n; ++c) subtract_product(U_r(j + 1, c), U_i(j + 1, c), m_r, m_i, U_r(j, c), U_i(j, c));
     }
 }
 
 void HessenbergLU::solve(double* re, double* im) const {
     const Eigen::Index n = n_;
+    const auto x_r = [&](Eigen::Index i) { return ShiftedAt(re + i * lanes); };
+    const auto x_i = [&](Eigen::Index i) { return ShiftedAt(im + i * lanes); };
     for (Eigen::Index j = 0; j + 1 < n; ++j) {  // the row operations: swaps and eliminations
-        const double *swap = swapped_.data() + j * lanes, *m_r = mr_.data() + j * lanes, *m_i = mi_.data() + j * lanes;
-        double *xr = re + j * lanes, *xi = im + j * lanes;
-        AMB_FAST_LANES {
-            const bool s = swap[l] != 0.0;
-            const double ar = xr[l], ai = xi[l], cr = xr[lanes + l], ci = xi[lanes + l];
-            const double top_r = s ? cr : ar, top_i = s ? ci : ai, low_r = s ? ar : cr, low_i = s ? ai : ci;
-            xr[l] = top_r, xi[l] = top_i;
-            xr[lanes + l] = low_r - (m_r[l] * top_r - m_i[l] * top_i);
-            xi[lanes + l] = low_i - (m_r[l] * top_i + m_i[l] * top_r);
-        }
+        const auto swap = (ConstShiftedAt(swapped_.data() + j * lanes) != 0.0).eval();
+        const Shifted ar = x_r(j), ai = x_i(j), br = x_r(j + 1), bi = x_i(j + 1);
+        x_r(j) = swap.select(br, ar), x_i(j) = swap.select(bi, ai);
+        x_r(j + 1) = swap.select(ar, br), x_i(j + 1) = swap.select(ai, bi);
+        subtract_product(x_r(j + 1), x_i(j + 1), ConstShiftedAt(mr_.data() + j * lanes), ConstShiftedAt(mi_.data() + j * lanes),
+                         x_r(j), x_i(j));
     }
     for (Eigen::Index i = n - 1; i >= 0; --i) {  // back substitution with U
-        double sr[lanes], si[lanes];
-        AMB_FAST_LANES sr[l] = re[i * lanes + l], si[l] = im[i * lanes + l];
+        Shifted sr = x_r(i), si = x_i(i);
         for (Eigen::Index c = i + 1; c < n; ++c) {
-            const double *u_r = ur_.data() + (i * n + c) * lanes, *u_i = ui_.data() + (i * n + c) * lanes;
-            AMB_FAST_LANES {
-                const double a = re[c * lanes + l], b = im[c * lanes + l];
-                sr[l] -= u_r[l] * a - u_i[l] * b;
-                si[l] -= u_r[l] * b + u_i[l] * a;
-            }
+            const ConstShiftedAt u_r(ur_.data() + (i * n + c) * lanes), u_i(ui_.data() + (i * n + c) * lanes);
+            sr -= u_r * x_r(c) - u_i * x_i(c);
+            si -= u_r * x_i(c) + u_i * x_r(c);
         }
-        const double *inv_r = dr_.data() + i * lanes, *inv_i = di_.data() + i * lanes;
-        AMB_FAST_LANES {
-            re[i * lanes + l] = sr[l] * inv_r[l] - si[l] * inv_i[l];
-            im[i * lanes + l] = sr[l] * inv_i[l] + si[l] * inv_r[l];
-        }
+        const ConstShiftedAt inv_r(dr_.data() + i * lanes), inv_i(di_.data() + i * lanes);
+        x_r(i) = sr * inv_r - si * inv_i;
+        x_i(i) = sr * inv_i + si * inv_r;
     }
 }
 
 void HessenbergLU::solve_transposed(double* re, double* im) const {
     const Eigen::Index n = n_;
+    const auto x_r = [&](Eigen::Index i) { return ShiftedAt(re + i * lanes); };
+    const auto x_i = [&](Eigen::Index i) { return ShiftedAt(im + i * lanes); };
     for (Eigen::Index i = 0; i < n; ++i) {  // U^T t = b
-        double sr[lanes], si[lanes];
-        AMB_FAST_LANES sr[l] = re[i * lanes + l], si[l] = im[i * lanes + l];
+        Shifted sr = x_r(i), si = x_i(i);
         for (Eigen::Index k = 0; k < i; ++k) {
-            const double *u_r = ur_.data() + (k * n + i) * lanes, *u_i = ui_.data() + (k * n + i) * lanes;
-            AMB_FAST_LANES {
-                const double a = re[k * lanes + l], b = im[k * lanes + l];
-                sr[l] -= u_r[l] * a - u_i[l] * b;
-                si[l] -= u_r[l] * b + u_i[l] * a;
-            }
+            const ConstShiftedAt u_r(ur_.data() + (k * n + i) * lanes), u_i(ui_.data() + (k * n + i) * lanes);
+            sr -= u_r * x_r(k) - u_i * x_i(k);
+            si -= u_r * x_i(k) + u_i * x_r(k);
         }
-        const double *inv_r = dr_.data() + i * lanes, *inv_i = di_.data() + i * lanes;
-        AMB_FAST_LANES {
-            re[i * lanes + l] = sr[l] * inv_r[l] - si[l] * inv_i[l];
-            im[i * lanes + l] = sr[l] * inv_i[l] + si[l] * inv_r[l];
-        }
+        const ConstShiftedAt inv_r(dr_.data() + i * lanes), inv_i(di_.data() + i * lanes);
+        x_r(i) = sr * inv_r - si * inv_i;
+        x_i(i) = sr * inv_i + si * inv_r;
     }
     for (Eigen::Index j = n - 2; j >= 0; --j) {  // then the row operations transposed, last first
-        const double *swap = swapped_.data() + j * lanes, *m_r = mr_.data() + j * lanes, *m_i = mi_.data() + j * lanes;
-        double *xr = re + j * lanes, *xi = im + j * lanes;
-        AMB_FAST_LANES {
-            const double ar = xr[l] - (m_r[l] * xr[lanes + l] - m_i[l] * xi[lanes + l]);
-            const double ai = xi[l] - (m_r[l] * xi[lanes + l] + m_i[l] * xr[lanes + l]);
-            const double cr = xr[lanes + l], ci = xi[lanes + l];
-            const bool s = swap[l] != 0.0;
-            xr[l] = s ? cr : ar, xi[l] = s ? ci : ai;
-            xr[lanes + l] = s ? ar : cr, xi[lanes + l] = s ? ai : ci;
-        }
+        subtract_product(x_r(j), x_i(j), ConstShiftedAt(mr_.data() + j * lanes), ConstShiftedAt(mi_.data() + j * lanes),
+                         x_r(j + 1), x_i(j + 1));
+        const auto swap = (ConstShiftedAt(swapped_.data() + j * lanes) != 0.0).eval();
+        const Shifted ar = x_r(j), ai = x_i(j), br = x_r(j + 1), bi = x_i(j + 1);
+        x_r(j) = swap.select(br, ar), x_i(j) = swap.select(bi, ai);
+        x_r(j + 1) = swap.select(ar, br), x_i(j + 1) = swap.select(ai, bi);
     }
 }
-
-#undef AMB_FAST_LANES
 
 namespace {
 constexpr double pi = 3.14159265358979323846;
@@ -331,19 +301,18 @@ SteadyLines::SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eig
     }
     // The noise's state: stationary covariance P; over a period w = zL - M^L z0 has covariance
     // P - M^L P M^LT, of which the lines' spectra explain (2 / L) sum sigma^2 Re(S S^H), S = W Xn.
-    roots_ = probe_noise_roots(model_);
-    Eigen::MatrixXd P = Eigen::MatrixXd::Zero(n, n);
-    for (const auto& root : roots_) P += root * root.transpose();
+    const Eigen::MatrixXd P = stationary_noise_covariance(model_);
+    root_ = covariance_root(P);
     Eigen::VectorXd explained(2 * B * q);  // per column of Xn: (2 / L) sigma^2 of its probe
     for (Eigen::Index k = 0; k < B; ++k)
         for (Eigen::Index j = 0; j < q; ++j)
             explained.segment(2 * (k * q + j), 2).setConstant(2.0 / static_cast<double>(L) *
                                                               model_.sensor_noise[j] * model_.sensor_noise[j]);
-    Eigen::MatrixXd residual =
-        P - ML_ * P * ML_.transpose() - W * (Xn_ * explained.asDiagonal() * Xn_.transpose()) * W.transpose();
-    residual = 0.5 * (residual + residual.transpose()).eval();
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(residual);
-    residual_root_ = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+    Eigen::MatrixXd explained_by_lines = Eigen::MatrixXd::Zero(n, n);  // Xn diag(explained) Xn^T, one triangle
+    explained_by_lines.selfadjointView<Eigen::Lower>().rankUpdate(Xn_ * explained.cwiseSqrt().asDiagonal());
+    explained_by_lines = explained_by_lines.selfadjointView<Eigen::Lower>();
+    Eigen::MatrixXd residual = P - ML_ * P * ML_.transpose() - W * explained_by_lines * W.transpose();
+    residual_root_ = covariance_root(0.5 * (residual + residual.transpose()));
     WL_ = (2.0 / static_cast<double>(L)) * W;
     clean_force_.resize(B, p);
     det_.resize(B * q);
@@ -361,32 +330,37 @@ void SteadyLines::start(const double* period_force, std::uint64_t seed) {
     const auto B = static_cast<Eigen::Index>(bins_.size());
     require_finite_samples("excitation", period_force, L_ * p);
     // The forces' lines, the probes' periodic response to them, the recorded (transduced) force lines.
-    // The last channel transformed (on any thread), kept: a sweep's points and repeated experiments
-    // share their excitation, and comparing it costs a twentieth of its transform.
-    static std::mutex guard;
-    static struct {
+    // The last few channels transformed (on any thread), kept: a sweep's points, repeated experiments and
+    // the two-axis pair (s and -s) share their excitations, and comparing one costs a twentieth of its
+    // transform.
+    struct Transformed {
         std::vector<double> samples;
         std::vector<Eigen::Index> bins;
         std::vector<cd> lines;
-    } last;
+    };
+    static std::mutex guard;
+    static std::vector<Transformed> recent;
     std::vector<double> channel(static_cast<std::size_t>(L_));
     std::vector<cd> spectrum(static_cast<std::size_t>(B));
     Eigen::MatrixXcd F(B, p);
     for (Eigen::Index c = 0; c < p; ++c) {
         for (Eigen::Index k = 0; k < L_; ++k) channel[static_cast<std::size_t>(k)] = period_force[k * p + c];
-        bool same = false;
+        bool found = false;
         {
             const std::lock_guard<std::mutex> lock(guard);
-            same = last.samples.size() == channel.size() && bins_ == last.bins &&
-                   std::memcmp(channel.data(), last.samples.data(), channel.size() * sizeof(double)) == 0;
-            if (same) spectrum = last.lines;  // bitwise the same samples: their transform
+            for (const Transformed& t : recent)  // bitwise the same samples: their transform
+                if (t.bins == bins_ && t.samples.size() == channel.size() &&
+                    std::memcmp(channel.data(), t.samples.data(), channel.size() * sizeof(double)) == 0) {
+                    spectrum = t.lines;
+                    found = true;
+                    break;
+                }
         }
-        if (!same) {
+        if (!found) {
             transform_(channel.data(), spectrum.data());
             const std::lock_guard<std::mutex> lock(guard);
-            last.samples = channel;
-            last.bins = bins_;
-            last.lines = spectrum;
+            if (recent.size() == 4) recent.erase(recent.begin());
+            recent.push_back({channel, bins_, spectrum});
         }
         const double a = model_.transducer_pole[c];
         for (Eigen::Index k = 0; k < B; ++k) {
@@ -403,7 +377,7 @@ void SteadyLines::start(const double* period_force, std::uint64_t seed) {
     force_.clear();
     for (Eigen::Index c = 0; c < p; ++c) force_.emplace_back(stream_seed(seed, 2, c));
     z0_.setZero();
-    add_stationary_noise(roots_, seed, z0_);
+    add_stationary_noise(root_, seed, z0_);
 }
 
 void SteadyLines::next(cd* force_lines, cd* displacement_lines) {

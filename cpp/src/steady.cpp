@@ -1,6 +1,7 @@
 #include "amb_fast/steady.hpp"
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Cholesky>
+#include <cmath>
 #include <stdexcept>
 
 namespace amb_fast {
@@ -52,20 +53,29 @@ Eigen::VectorXd periodic_start(const Eigen::MatrixXd& M, Eigen::Index N, const E
     return (I - matrix_power(M, N)).partialPivLu().solve(zN);
 }
 
-Eigen::MatrixXd stationary_noise_root(const Eigen::MatrixXd& M, const Eigen::VectorXd& g, double sigma) {
-    // P = sum_k M^k Q M^kT; doubling: P <- P + A P A^T, A <- A A, converging quadratically in samples.
-    Eigen::MatrixXd P = sigma * sigma * g * g.transpose(), A = M;
+Eigen::MatrixXd stationary_covariance(const Eigen::MatrixXd& M, const Eigen::MatrixXd& G, const Eigen::VectorXd& sigma) {
+    // P = sum_k M^k Q M^kT; doubling: P <- P + A P A^T, A <- A A.
+    Eigen::MatrixXd P = G * sigma.cwiseAbs2().asDiagonal() * G.transpose(), A = M, next(M.rows(), M.cols());
     for (int it = 0; it < 80; ++it) {
-        const Eigen::MatrixXd next = P + A * P * A.transpose();
+        next.noalias() = A * P * A.transpose();
+        next += P;
         A = A * A;
         const bool done = (next - P).cwiseAbs().maxCoeff() <= 1e-16 * next.cwiseAbs().maxCoeff();
-        P = next;
+        P.swap(next);
         if (done && A.cwiseAbs().maxCoeff() < 1e-12) break;
     }
-    P = 0.5 * (P + P.transpose());
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(P);
-    const Eigen::VectorXd roots = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt();
-    return eig.eigenvectors() * roots.asDiagonal();
+    return 0.5 * (P + P.transpose());
+}
+
+Eigen::MatrixXd covariance_root(const Eigen::MatrixXd& P) {
+    const Eigen::Index n = P.rows();
+    Eigen::VectorXd scale(n);
+    for (Eigen::Index i = 0; i < n; ++i) scale[i] = P(i, i) > 0.0 ? std::sqrt(P(i, i)) : 1.0;
+    const Eigen::MatrixXd C = scale.cwiseInverse().asDiagonal() * P * scale.cwiseInverse().asDiagonal();
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(C);  // C = Pi^T L D L^T Pi
+    const Eigen::MatrixXd L = ldlt.matrixL();
+    const Eigen::VectorXd d = ldlt.vectorD().cwiseMax(0.0).cwiseSqrt();
+    return scale.asDiagonal() * (ldlt.transpositionsP().transpose() * (L * d.asDiagonal()));
 }
 
 }  // namespace amb_fast

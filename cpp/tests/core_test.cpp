@@ -19,6 +19,7 @@
 #include "amb_fast/random.hpp"
 #include "amb_fast/mimo_lines.hpp"
 #include "amb_fast/spectrum.hpp"
+#include "amb_fast/steady.hpp"
 
 using namespace amb_fast;
 using cd = std::complex<double>;
@@ -490,6 +491,34 @@ int main() {
         }
         check(same_in_any_lane, "Hessenberg LU: a shift's solution does not depend on its lane");
         check(worst < 1e-12, "Hessenberg LU solves equal dense LU (" + std::to_string(worst) + ")");
+    }
+
+    {  // The stationary covariance solves P = M P M^T + G S G^T; its root R R^T = P, also for a singular P
+        // with entries of very different sizes (a state without noise, states scaled by 1e-6 and 1e3).
+        const Eigen::Index n = 6;
+        Eigen::MatrixXd M(n, n), G(n, 2);
+        for (Eigen::Index i = 0; i < n; ++i)
+            for (Eigen::Index j = 0; j < n; ++j) M(i, j) = 0.25 * std::sin(2.3 * static_cast<double>(i * n + j) + 0.1);
+        M(0, 0) = 0.999;  // a slow pole
+        for (Eigen::Index i = 0; i < n; ++i) G(i, 0) = std::cos(static_cast<double>(i)), G(i, 1) = 0.3 * static_cast<double>(i);
+        M.row(n - 1).setZero();  // the last state is not driven: P singular
+        M.col(n - 1).setZero();
+        G.row(n - 1).setZero();
+        Eigen::VectorXd units(n);
+        units << 1e-6, 1e-6, 1.0, 1e3, 1e3, 1.0;
+        M = units.asDiagonal() * M * units.cwiseInverse().asDiagonal();
+        G = units.asDiagonal() * G;
+        const Eigen::Vector2d sigma(2e-3, 5e-4);
+        const Eigen::MatrixXd P = stationary_covariance(M, G, sigma);
+        const Eigen::MatrixXd Q = G * sigma.cwiseAbs2().asDiagonal() * G.transpose();
+        const Eigen::MatrixXd R = covariance_root(P);
+        const Eigen::VectorXd scale = P.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+        const auto relative = [&](const Eigen::MatrixXd& E) {  // entry by entry, against sqrt(P_ii P_jj)
+            return (scale.asDiagonal() * E * scale.asDiagonal()).cwiseAbs().maxCoeff();
+        };
+        const double lyapunov = relative(P - M * P * M.transpose() - Q), root = relative(R * R.transpose() - P);
+        check(lyapunov < 1e-12 && root < 1e-12, "stationary covariance solves Lyapunov (" + std::to_string(lyapunov) +
+                                                    "), its root squares to it (" + std::to_string(root) + ")");
     }
 
     std::printf("%d passed, %d failed\n", passed, failed);

@@ -94,11 +94,10 @@ const char* mimo_kernel_name();           // the kernel automatic picks here: "a
 // line-free part): splitmix64 of the run's seed, the kind and j, so every source has its own stream.
 std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t kind, Eigen::Index j);
 
-// The state's stationary distribution under the probes' noise: a square root of its covariance per
-// noisy probe (stationary_noise_root), and z += a draw from it, sum_j root_j N(0, I), from the stream
-// of start_noise_seed(seed).
-std::vector<Eigen::MatrixXd> probe_noise_roots(const MimoModel& model);
-void add_stationary_noise(const std::vector<Eigen::MatrixXd>& roots, std::uint64_t seed, Eigen::VectorXd& z);
+// The state's stationary distribution under the probes' noise: its covariance (steady.hpp), and
+// z += root N(0, I) for a square root of it (covariance_root), from the stream of start_noise_seed(seed).
+Eigen::MatrixXd stationary_noise_covariance(const MimoModel& model);
+void add_stationary_noise(const Eigen::MatrixXd& root, std::uint64_t seed, Eigen::VectorXd& z);
 
 // Runs the loop from rest: recorded forces (n x p) and outputs (n x r), sample-major.
 void mimo_simulate(const MimoModel& model, const double* force, Eigen::Index n, std::uint64_t seed, double* recorded,

@@ -61,7 +61,7 @@ private:
     std::vector<std::complex<double>> z_;       // e^{jw} per line
     Eigen::MatrixXd T_inverse_, ML_, WL_, residual_root_, CRz_re_, CRz_im_, Xn_;
     Eigen::MatrixXcd G_, clean_force_;
-    std::vector<Eigen::MatrixXd> roots_;        // the stationary noise (probe_noise_roots)
+    Eigen::MatrixXd root_;                      // of the state's stationary noise covariance
     Eigen::VectorXcd det_;                      // the probes' periodic response to the forces
     std::optional<NormalStream> rest_;          // the state's line-free part
     std::vector<NormalStream> probe_, force_;   // per probe, per force channel

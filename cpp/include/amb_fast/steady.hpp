@@ -30,9 +30,15 @@ Eigen::MatrixXd matrix_power(const Eigen::MatrixXd& M, Eigen::Index N);
 // the start of a period in periodic steady state. M^N by repeated squaring.
 Eigen::VectorXd periodic_start(const Eigen::MatrixXd& M, Eigen::Index N, const Eigen::VectorXd& zN);
 
-// A square root S (P = S S^T) of the stationary covariance P = M P M^T + sigma^2 g g^T of z driven by
-// white noise of rms sigma through g, by the doubling algorithm; draws z = S w, w ~ N(0, I).
-Eigen::MatrixXd stationary_noise_root(const Eigen::MatrixXd& M, const Eigen::VectorXd& g, double sigma);
+// The stationary covariance P = M P M^T + G diag(sigma^2) G^T of z driven by independent white noises
+// of rms sigma_j through the columns of G, by the doubling algorithm (converging quadratically in
+// samples, however slow the slowest pole).
+Eigen::MatrixXd stationary_covariance(const Eigen::MatrixXd& M, const Eigen::MatrixXd& G, const Eigen::VectorXd& sigma);
+
+// A square root R (P = R R^T) of a covariance P: LDL^T with diagonal pivoting of P scaled to a unit
+// diagonal (states in m, m/s and A keep their own digits); rounding's negative pivots count as 0.
+// z = R w, w ~ N(0, I), draws from N(0, P).
+Eigen::MatrixXd covariance_root(const Eigen::MatrixXd& P);
 
 // The force transducer's AC-coupling state q at a period's start in steady state, from q after one
 // period from rest (q[k+1] = a q[k] + (1 - a) f[k], so q0 = qN / (1 - a^N)).
