@@ -1,6 +1,7 @@
 #include "amb_fast/mimo_lines.hpp"
 
 #include <Eigen/Eigenvalues>  // HessenbergDecomposition
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <mutex>
@@ -60,7 +61,7 @@ void HessenbergLU::factor(const cd* z) {
             const auto swap = (U_r(j + 1, j).square() + U_i(j + 1, j).square() >
                                U_r(j, j).square() + U_i(j, j).square()).eval();
             ShiftedAt(swapped_.data() + j * lanes) = swap.cast<double>();
-            for (Eigen::Index c = j; c < n; ++c) {
+            for (Eigen::Index c = j; c < n && swap.any(); ++c) {
                 const Shifted ar = U_r(j, c), ai = U_i(j, c), br = U_r(j + 1, c), bi = U_i(j + 1, c);
                 U_r(j, c) = swap.select(br, ar), U_i(j, c) = swap.select(bi, ai);
                 U_r(j + 1, c) = swap.select(ar, br), U_i(j + 1, c) = swap.select(ai, bi);
@@ -467,65 +468,65 @@ void mimo_line_experiments(const MimoModel& model, const double* const* period_f
     steady_lines(model, period_force, L, periods, seeds, bins, force_lines, displacement_lines);
 }
 
+namespace {
+using Matrix22 = std::array<cd, 4>;  // row-major 2x2: (0, 0), (0, 1), (1, 0), (1, 1)
+
+// 1 / x without the library's scaled division (x: a determinant of well-conditioned line spectra).
+cd reciprocal(cd x) { return std::conj(x) / std::norm(x); }
+
+Matrix22 product(const Matrix22& a, const Matrix22& b) {
+    return {a[0] * b[0] + a[1] * b[2], a[0] * b[1] + a[1] * b[3], a[2] * b[0] + a[3] * b[2], a[2] * b[1] + a[3] * b[3]};
+}
+Matrix22 inverse(const Matrix22& a) {
+    const cd inv = reciprocal(a[0] * a[3] - a[1] * a[2]);
+    return {a[3] * inv, -a[1] * inv, -a[2] * inv, a[0] * inv};
+}
+}  // namespace
+
 Estimate2x2 estimate_2x2(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines,
                          Eigen::Index periods, Eigen::Index lines) {
-    using cd = std::complex<double>;
-    using M2 = Eigen::Matrix2cd;
     require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
     Estimate2x2 est;
     est.lines = lines;
     est.periods = periods;
     const auto n = static_cast<std::size_t>(4 * lines);
-    est.H.resize(n);
-    est.receptance.resize(n);
-    est.force.resize(n);
-    est.displacement.resize(n);
+    for (auto* v : {&est.H, &est.receptance, &est.force, &est.displacement}) v->resize(n);
     est.var_re.resize(n);
     est.var_im.resize(n);
     // [period][line][channel][experiment]: one 2x2 matrix (row: channel, column: experiment), row-major.
-    auto matrix = [&](const cd* lines_of, Eigen::Index period, Eigen::Index j) {
-        const cd* x = lines_of + (period * lines + j) * 4;
-        M2 A;
-        A << x[0], x[1], x[2], x[3];
-        return A;
+    const auto at = [&](const cd* x, Eigen::Index period, Eigen::Index j) {
+        const cd* m = x + (period * lines + j) * 4;
+        return Matrix22{m[0], m[1], m[2], m[3]};
     };
-    auto store = [](std::vector<cd>& to, Eigen::Index j, const M2& A) {
-        for (int i = 0; i < 2; ++i)
-            for (int c = 0; c < 2; ++c) to[static_cast<std::size_t>(4 * j + 2 * i + c)] = A(i, c);
-    };
-    auto inverse = [](const M2& A) {
-        const cd det = A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0);
-        M2 inv;
-        inv << A(1, 1) / det, -A(0, 1) / det, -A(1, 0) / det, A(0, 0) / det;
-        return inv;
-    };
-    const double scale = 1.0 / static_cast<double>(periods * (periods - 1));
+    const double mean = 1.0 / static_cast<double>(periods), scale = 1.0 / static_cast<double>(periods * (periods - 1));
     for (Eigen::Index j = 0; j < lines; ++j) {
-        M2 F = M2::Zero(), Y = M2::Zero();
+        Matrix22 F{}, Y{};  // the period means
         for (Eigen::Index period = 0; period < periods; ++period) {
-            F += matrix(force_lines, period, j);
-            Y += matrix(displacement_lines, period, j);
+            const Matrix22 f = at(force_lines, period, j), y = at(displacement_lines, period, j);
+            for (int e = 0; e < 4; ++e) F[e] += f[e], Y[e] += y[e];
         }
-        F /= static_cast<double>(periods);
-        Y /= static_cast<double>(periods);
-        if (!F.allFinite() || !Y.allFinite()) throw std::invalid_argument("force and displacement must be finite");
-        const M2 Yinv = inverse(Y);
-        const M2 H = F * Yinv;
-        Eigen::Matrix2d re = Eigen::Matrix2d::Zero(), im = Eigen::Matrix2d::Zero();
+        for (int e = 0; e < 4; ++e) {
+            F[e] *= mean, Y[e] *= mean;
+            if (!std::isfinite(F[e].real() + F[e].imag() + Y[e].real() + Y[e].imag()))
+                throw std::invalid_argument("force and displacement must be finite");
+        }
+        const Matrix22 Yinv = inverse(Y), H = product(F, Yinv), receptance = inverse(H);
+        // Linearised: dH = (dF - H dY) Y^-1 per period; the variance of Re H and Im H is the sum of the
+        // squares / (P (P - 1)).
+        double re[4] = {0, 0, 0, 0}, im[4] = {0, 0, 0, 0};
         for (Eigen::Index period = 0; period < periods; ++period) {
-            const M2 dH = ((matrix(force_lines, period, j) - F) - H * (matrix(displacement_lines, period, j) - Y)) * Yinv;
-            re += dH.real().cwiseAbs2();
-            im += dH.imag().cwiseAbs2();
+            Matrix22 dF = at(force_lines, period, j), dY = at(displacement_lines, period, j);
+            for (int e = 0; e < 4; ++e) dF[e] -= F[e], dY[e] -= Y[e];
+            const Matrix22 HdY = product(H, dY);
+            for (int e = 0; e < 4; ++e) dF[e] -= HdY[e];
+            const Matrix22 dH = product(dF, Yinv);
+            for (int e = 0; e < 4; ++e) re[e] += dH[e].real() * dH[e].real(), im[e] += dH[e].imag() * dH[e].imag();
         }
-        store(est.H, j, H);
-        store(est.receptance, j, inverse(H));
-        store(est.force, j, F);
-        store(est.displacement, j, Y);
-        for (int i = 0; i < 2; ++i)
-            for (int c = 0; c < 2; ++c) {
-                est.var_re[static_cast<std::size_t>(4 * j + 2 * i + c)] = re(i, c) * scale;
-                est.var_im[static_cast<std::size_t>(4 * j + 2 * i + c)] = im(i, c) * scale;
-            }
+        for (int e = 0; e < 4; ++e) {
+            const auto k = static_cast<std::size_t>(4 * j + e);
+            est.H[k] = H[e], est.receptance[k] = receptance[e], est.force[k] = F[e], est.displacement[k] = Y[e];
+            est.var_re[k] = re[e] * scale, est.var_im[k] = im[e] * scale;
+        }
     }
     return est;
 }
