@@ -26,6 +26,8 @@ from scipy import signal
 
 import amb_fast as af
 from _common import arguments, median_seconds, report
+from amb_fast import _core
+from amb_fast._experiment import _plan
 
 
 def reset_peak_rss() -> None:
@@ -81,6 +83,20 @@ def main() -> None:
             one, two = (median_seconds(lambda r=run, w=w: r(w), 1, warm_up=False) for w in (1, 2))
             ratios_of_pairs.append(one / two)
         paired[f"scaling 1 -> 2 workers{label}, interleaved pairs"] = float(np.median(ratios_of_pairs))
+    # What the machine gives two threads at that moment: the core's call alone for the same 40 points
+    # (no Python in it), in interleaved pairs. The sweep's scaling cannot exceed this.
+    forty = kp[:: max(1, points // 40)][:40]
+    plan, _ = _plan(sphs.harmonics, sphs.period_samples)
+    controllers = [replace(pid, kp=k)._to_core() for k in forty]
+    zeros, seeds = np.zeros(forty.size, dtype=np.int64), np.arange(1, forty.size + 1, dtype=np.uint64)
+    core_args = (sphs.samples, [rig._to_core()] * forty.size, controllers, zeros, seeds, 10, plan, 5)
+    core_ratios = []
+    for _ in range(6 * repeats + 1):
+        one, two = (median_seconds(lambda w=w: _core.run_sweep(*core_args, w, True), 1, warm_up=False) for w in (1, 2))
+        core_ratios.append(one / two)
+    paired["scaling 1 -> 2 workers, 40 points, the core's call alone, interleaved pairs"] = float(
+        np.median(core_ratios)
+    )
     single = median_seconds(lambda: af.run_experiment(rig, pid, sphs), 5 * repeats)
     single_samples = (result.settle_periods[0] + result.periods) * sphs.period_samples
     A, B, C, D = af.closed_loop(rig, pid)

@@ -386,7 +386,16 @@ def test_a_damaged_hdf5_header_is_refused_before_hdf5_reads_it(tmp_path, estimat
 
 def test_flipped_bytes_in_a_sweep_file_are_refused(tmp_path) -> None:
     pytest.importorskip("xarray")
-    result = af.sweep(af.Rig(), af.PID.paper(), af.schroeder_multisine(f_max=20.0), kp=[2200.0, 2600.0], periods=2)
+    result = af.sweep(af.Rig(), af.PID.paper(), af.schroeder_multisine(f_max=20.0), kp=[2200.0, 2600.0], periods=2,
+                      seed=3)  # fmt: skip
+    npz = tmp_path / "flag.npz"
+    result.save(npz)
+    data = bytearray(npz.read_bytes())
+    data[data.index(b"PK\x01\x02") + 8] ^= 0x01  # a member's "encrypted" flag (central directory): zipfile's
+    # RuntimeError, refused as damaged
+    npz.write_bytes(bytes(data))
+    with pytest.raises(ValueError, match="damaged"):
+        af.load_sweep(npz)
     for suffix in (".nc", ".npz"):
         path = tmp_path / f"s{suffix}"
         result.save(path)

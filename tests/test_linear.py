@@ -72,3 +72,21 @@ def test_poles_of_a_lightly_damped_loop_are_inside_the_unit_circle(lagged_rig, p
     assert np.all(np.abs(poles) < 1)
     with pytest.raises(ValueError, match="freq must be"):
         af.predict(lagged_rig, pid, [10.0, 2500.0])
+
+
+def test_core_eigenvalues_equal_numpy_and_do_not_depend_on_threads(rng) -> None:
+    """The stability checks of runs and sweeps take their poles from the core (one function, the same
+    digits for both): against numpy's LAPACK eigenvalues to 1e-12 of the spectral radius, closed loops
+    and random matrices with complex pairs alike, and bit for bit the same on 1 or 2 threads."""
+    from amb_fast import _core
+    from amb_fast._linear import _closed_loop_stacks, _gain_arrays
+
+    pid = af.PID.paper()
+    ((_, loops),) = _closed_loop_stacks(af.Rig.paper(), pid, _gain_arrays(pid, np.linspace(1e3, 5e3, 150), None, None))
+    stack = np.concatenate([loops, rng.standard_normal((150, 7, 7))])
+    ours = _core.eigenvalues(stack, 1)
+    np.testing.assert_array_equal(ours, _core.eigenvalues(stack, 2))
+    for mine, theirs in zip(ours, np.linalg.eigvals(stack)):
+        # eigenvalues as a multiset: match each of numpy's to the nearest of ours
+        gap = np.abs(theirs[:, None] - mine[None, :]).min(axis=1)
+        assert gap.max() <= 1e-12 * np.abs(theirs).max()

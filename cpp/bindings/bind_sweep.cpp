@@ -1,6 +1,9 @@
 #include "amb_fast/batch.hpp"
 #include "bindings.hpp"
 
+#include <pybind11/complex.h>
+#include <pybind11/numpy.h>
+
 using namespace amb_fast;
 
 void bind_sweep(py::module_& m) {
@@ -48,4 +51,22 @@ void bind_sweep(py::module_& m) {
         py::arg("steady_start") = false, py::arg("cancel") = nullptr,
         "Runs one experiment per point (rig, controller) on `workers` threads (<= 0: all cores), GIL released; "
         "Ctrl-C or cancel.cancel() stops it.");
+    m.def(
+        "eigenvalues",
+        [](const py::array_t<double, py::array::c_style | py::array::forcecast>& stack, int workers) {
+            if (stack.ndim() != 3 || stack.shape(1) != stack.shape(2))
+                throw std::invalid_argument("stack must have shape (count, m, m)");
+            const auto count = static_cast<Eigen::Index>(stack.shape(0)), m = static_cast<Eigen::Index>(stack.shape(1));
+            py::array_t<std::complex<double>> values({count, m});
+            std::complex<double>* out = values.mutable_data();
+            const double* in = stack.data();
+            interruptible([&] {
+                eigenvalues(in, count, m, out, workers);
+                return 0;
+            });
+            return values;
+        },
+        py::arg("stack"), py::arg("workers") = 1,
+        "The eigenvalues of a stack of real square matrices (count, m, m) -> (count, m), complex, on `workers` "
+        "threads (<= 0: all cores), GIL released.");
 }

@@ -1,5 +1,6 @@
 #include "amb_fast/batch.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <exception>
 #include <limits>
@@ -132,6 +133,31 @@ void run_points(const Eigen::VectorXd& period_force, const SweepPoint* points, E
     }
 }
 
+// Runs work(begin, end) on contiguous shares of [0, count), one per worker (<= 0: one per core): the
+// calling thread takes the first (it is the one that can see Ctrl-C), a thread each the others; the
+// first error is rethrown once all have stopped. Shares are fixed by count and workers alone.
+template <class Work>
+void in_shares(Eigen::Index count, int workers, Work&& work) {
+    if (workers <= 0) workers = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    workers = static_cast<int>(std::min<Eigen::Index>(workers, std::max<Eigen::Index>(count, 1)));
+    const InterruptCheck* check = interrupt_check();
+    std::vector<std::exception_ptr> errors(static_cast<std::size_t>(workers));
+    auto share = [&](int w) {
+        const ScopedInterruptCheck installed(check);
+        try {
+            work(count * w / workers, count * (w + 1) / workers);
+        } catch (...) {
+            errors[static_cast<std::size_t>(w)] = std::current_exception();
+        }
+    };
+    std::vector<std::thread> threads;
+    for (int w = 1; w < workers; ++w) threads.emplace_back(share, w);
+    share(0);
+    for (auto& t : threads) t.join();
+    for (auto& e : errors)
+        if (e) std::rethrow_exception(e);
+}
+
 }  // namespace
 
 SweepEstimates run_sweep(const Eigen::Ref<const Eigen::VectorXd>& period_force, const std::vector<SweepPoint>& points,
@@ -163,28 +189,26 @@ SweepEstimates run_sweep(const Eigen::Ref<const Eigen::VectorXd>& period_force, 
     out.blocks = periods / plan.periods_per_block;
 
     const Eigen::VectorXd force = period_force;
-    if (workers <= 0) workers = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-    workers = static_cast<int>(std::min<Eigen::Index>(workers, std::max<Eigen::Index>(n, 1)));
-    // Contiguous shares, so each point's numbers do not depend on how many workers there are. The
-    // calling thread computes the first share itself (it is the one that can see Ctrl-C).
-    const InterruptCheck* check = interrupt_check();
-    std::vector<std::thread> threads;
-    std::vector<std::exception_ptr> errors(static_cast<std::size_t>(workers));
-    auto share = [&](int w) {
-        const Eigen::Index begin = n * w / workers, end = n * (w + 1) / workers;
-        const ScopedInterruptCheck installed(check);
-        try {
-            run_points(force, points.data() + begin, end - begin, periods, plan, median_window, steady_start, out, begin);
-        } catch (...) {
-            errors[static_cast<std::size_t>(w)] = std::current_exception();
-        }
-    };
-    for (int w = 1; w < workers; ++w) threads.emplace_back(share, w);
-    share(0);
-    for (auto& t : threads) t.join();
-    for (auto& e : errors)
-        if (e) std::rethrow_exception(e);
+    // Contiguous shares, so each point's numbers do not depend on how many workers there are.
+    in_shares(n, workers, [&](Eigen::Index begin, Eigen::Index end) {
+        run_points(force, points.data() + begin, end - begin, periods, plan, median_window, steady_start, out, begin);
+    });
     return out;
+}
+
+void eigenvalues(const double* stack, Eigen::Index count, Eigen::Index m, std::complex<double>* values, int workers) {
+    using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    in_shares(count, workers, [&](Eigen::Index begin, Eigen::Index end) {
+        Eigen::EigenSolver<Eigen::MatrixXd> solver(m);
+        for (Eigen::Index k = begin; k < end; ++k) {
+            if (k % 64 == 0) poll_interrupt();
+            const Eigen::MatrixXd A = Eigen::Map<const RowMatrix>(stack + k * m * m, m, m);
+            const Eigen::VectorXd d = balancing(A);  // as LAPACK's geev: the small poles keep their digits
+            solver.compute(d.cwiseInverse().asDiagonal() * A * d.asDiagonal(), false);
+            if (solver.info() != Eigen::Success) throw std::runtime_error("eigenvalues did not converge");
+            for (Eigen::Index i = 0; i < m; ++i) values[k * m + i] = solver.eigenvalues()[i];
+        }
+    });
 }
 
 }  // namespace amb_fast

@@ -137,32 +137,6 @@ void HessenbergLU::solve_transposed(double* re, double* im) const {
 namespace {
 constexpr double pi = 3.14159265358979323846;
 
-// Powers of two d with D^-1 M D balanced (each state's row and column of similar size; Parlett and
-// Reinsch, as LAPACK's gebal): exact in floating point, and without it the orthogonal Hessenberg
-// reduction mixes states of very different scales (m, m/s, A) and loses their small digits.
-Eigen::VectorXd balancing(const Eigen::MatrixXd& M) {
-    const Eigen::Index n = M.rows();
-    Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
-    Eigen::MatrixXd B = M;
-    for (bool changed = true; changed;) {
-        changed = false;
-        for (Eigen::Index i = 0; i < n; ++i) {
-            const double c = B.col(i).cwiseAbs().sum() - std::abs(B(i, i)), r = B.row(i).cwiseAbs().sum() - std::abs(B(i, i));
-            if (c == 0.0 || r == 0.0) continue;
-            double f = 1.0;
-            const double total = c + r;
-            double cs = c, rs = r;
-            while (cs < rs / 2.0) cs *= 2.0, rs /= 2.0, f *= 2.0;
-            while (cs >= rs * 2.0) cs /= 2.0, rs *= 2.0, f /= 2.0;
-            if (cs + rs >= 0.95 * total) continue;
-            changed = true;
-            d[i] *= f;
-            B.col(i) *= f;
-            B.row(i) /= f;
-        }
-    }
-    return d;
-}
 
 // From rest: the loop sample by sample, every recorded period transformed.
 void lines_from_rest(const MimoModel& model, const double* const* period_force, Eigen::Index L,

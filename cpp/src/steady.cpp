@@ -78,4 +78,28 @@ Eigen::MatrixXd covariance_root(const Eigen::MatrixXd& P) {
     return scale.asDiagonal() * (ldlt.transpositionsP().transpose() * (L * d.asDiagonal()));
 }
 
+Eigen::VectorXd balancing(const Eigen::MatrixXd& M) {
+    const Eigen::Index n = M.rows();
+    Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
+    Eigen::MatrixXd B = M;
+    for (bool changed = true; changed;) {
+        changed = false;
+        for (Eigen::Index i = 0; i < n; ++i) {
+            const double c = B.col(i).cwiseAbs().sum() - std::abs(B(i, i)), r = B.row(i).cwiseAbs().sum() - std::abs(B(i, i));
+            if (c == 0.0 || r == 0.0) continue;
+            double f = 1.0;
+            const double total = c + r;
+            double cs = c, rs = r;
+            while (cs < rs / 2.0) cs *= 2.0, rs /= 2.0, f *= 2.0;
+            while (cs >= rs * 2.0) cs /= 2.0, rs *= 2.0, f /= 2.0;
+            if (cs + rs >= 0.95 * total) continue;
+            changed = true;
+            d[i] *= f;
+            B.col(i) *= f;
+            B.row(i) /= f;
+        }
+    }
+    return d;
+}
+
 }  // namespace amb_fast

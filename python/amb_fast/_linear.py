@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import expm
 
+from . import _core
 from ._dispatch import two_axis_aware
 from ._errors import UnstableLoopError
 from ._params import PID, Rig
@@ -205,12 +206,20 @@ def closed_loop_poles(rig: Rig, controller: AnyController) -> np.ndarray:
 
 
 def loop_poles(rig: Rig, controller: AnyController) -> np.ndarray:
-    """The closed-loop poles as every run and sweep computes them (so they choose the same settling):
-    for a PID the affine stack of :func:`spectral_radius`, else the eigenvalues of :func:`closed_loop`."""
+    """The closed-loop poles as every run and sweep computes them (so they choose the same settling and
+    flag the same points unstable): the core's eigenvalues (:func:`_eigenvalues`) of, for a PID, the
+    affine stack of :func:`spectral_radius`, else :func:`closed_loop`'s matrix."""
     if isinstance(controller, PID):
         ((_, stack),) = _closed_loop_stacks(rig, controller, _gain_arrays(controller, None, None, None))
-        return np.linalg.eigvals(stack)[0]
-    return np.linalg.eigvals(closed_loop(rig, controller)[0])
+        return _eigenvalues(stack)[0]
+    return _eigenvalues(closed_loop(rig, controller)[0][None])[0]
+
+
+def _eigenvalues(stack: np.ndarray, workers: int = 1) -> np.ndarray:
+    """Eigenvalues of a stack of square matrices (count, m, m), in the core on up to ``workers`` threads
+    (one per 128 matrices: starting a thread costs about fifty 7x7 solves): one function for single runs
+    and sweeps, so both see the same digits."""
+    return _core.eigenvalues(np.ascontiguousarray(stack, dtype=float), max(1, min(workers, len(stack) // 128)))
 
 
 @functools.lru_cache(maxsize=256)
@@ -273,19 +282,25 @@ def _closed_loop_stacks(rig: Rig, pid: PID, gains: np.ndarray):  # noqa: ANN202
 
 
 def spectral_radius(
-    rig: Rig, pid: PID, *, kp: ArrayLike | None = None, ki: ArrayLike | None = None, kd: ArrayLike | None = None
+    rig: Rig,
+    pid: PID,
+    *,
+    kp: ArrayLike | None = None,
+    ki: ArrayLike | None = None,
+    kd: ArrayLike | None = None,
+    workers: int = 1,
 ) -> np.ndarray:
     """Largest |z| of the closed-loop poles for many gain sets at once (the rest of ``pid`` fixed).
 
     The closed-loop matrix is affine in the gains, so each gain set's matrix is a combination of four
-    cached ones, and the eigenvalues of the whole stack come in one call. Returns one radius per gain
-    set (stable: < 1), in the broadcast shape of the gains, flattened. A single run and a sweep use
-    this same computation, so they choose the same settling time.
+    cached ones, and the eigenvalues of the whole stack come in one call (on ``workers`` threads).
+    Returns one radius per gain set (stable: < 1), in the broadcast shape of the gains, flattened. A
+    single run and a sweep use this same computation, so they choose the same settling time.
     """
     gains = _gain_arrays(pid, kp, ki, kd)
     radius = np.empty(len(gains))
     for rows, stack in _closed_loop_stacks(rig, pid, gains):
-        radius[rows] = np.max(np.abs(np.linalg.eigvals(stack)), axis=-1)
+        radius[rows] = np.max(np.abs(_eigenvalues(stack, workers)), axis=-1)
     return radius
 
 

@@ -106,7 +106,7 @@ def _run_chunk(
         # controllers are made from the gain arrays without a PID per point.
         assert rig is not None
         swept = {name: values[name] for name in names}
-        radius = spectral_radius(rig, controller, **swept)
+        radius = spectral_radius(rig, controller, **swept, workers=workers)
         rigs: list[Rig] = [rig] * n
         controllers: list[AnyController] = [controller] * n  # what the settling rule reads: the same fs
         gains = _gain_arrays(controller, swept.get("kp"), swept.get("ki"), swept.get("kd"))

@@ -38,4 +38,9 @@ SweepEstimates run_sweep(const Eigen::Ref<const Eigen::VectorXd>& period_force, 
                          Eigen::Index periods, LinePlan plan, int median_window, int workers,
                          bool steady_start = false);
 
+// The eigenvalues of `count` real m x m matrices (stack: row-major, one after the other) into
+// values[k * m + i], on `workers` threads (<= 0: one per core): a sweep's stability checks, which a single
+// run makes through the same function (the same digits).
+void eigenvalues(const double* stack, Eigen::Index count, Eigen::Index m, std::complex<double>* values, int workers);
+
 }  // namespace amb_fast

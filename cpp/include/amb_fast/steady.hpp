@@ -23,6 +23,11 @@ struct ClosedLoopMap {
     Eigen::VectorXd noise_in;
 };
 
+// Powers of two d with D^-1 M D balanced (each state's row and column of similar size; Parlett and
+// Reinsch, as LAPACK's gebal): exact in floating point. Without it, orthogonal reductions (Hessenberg,
+// QR) mix states of very different scales (m, m/s, A) and lose their small digits.
+Eigen::VectorXd balancing(const Eigen::MatrixXd& M);
+
 // M^N by repeated squaring (log2 N products).
 Eigen::MatrixXd matrix_power(const Eigen::MatrixXd& M, Eigen::Index N);
 

@@ -341,9 +341,12 @@ def read_netcdf(path: str | Path):  # noqa: ANN201
 
 
 def read_npz(path: Path):  # noqa: ANN201
-    """``np.load`` that turns a failed CRC-32 (zip's checksum per member) into a clear error."""
+    """``np.load`` that turns a failed CRC-32 (zip's checksum per member) or a damaged header into a clear
+    error (a flipped flag bit reads as an encrypted or unsupported member: zipfile's RuntimeError and
+    NotImplementedError)."""
     try:
         with open(path, "rb") as handle, np.load(handle, allow_pickle=False) as f:
             return {name: f[name] for name in f.files}
-    except (zipfile.BadZipFile, zlib.error, ValueError, OSError, KeyError, EOFError) as error:
+    except (zipfile.BadZipFile, zlib.error, ValueError, OSError, KeyError, EOFError, RuntimeError,
+            NotImplementedError) as error:  # fmt: skip
         raise ValueError(f"{path.name} is damaged: {error}") from None
