@@ -274,8 +274,9 @@ def sweep(
     :func:`run_experiment` of that point bit for bit. A sweep of PID gains makes the core's controllers
     from the gain arrays, without a :class:`PID` per point.
 
-    Without an ``executor`` the grid runs here in one core call split across ``workers`` threads (with a
-    progress bar: about 20 calls, one per update). With one, it is cut into chunks of ``chunk_size``
+    Without an ``executor`` the grid runs here in core calls split across ``workers`` threads: one call
+    for up to ~32 MB of estimates (2,300 points of 200 lines), more for larger grids, and about 20 with
+    a progress bar (one per update). With one, it is cut into chunks of ``chunk_size``
     points (default: equal chunks, a multiple of the number of workers, up to eight per worker and of at
     least 32 points where there are enough), each run on the executor with ``workers`` core threads
     (default one). ``chunk_size`` sets the calls' size either way. Results come back in grid order.
@@ -330,8 +331,13 @@ def sweep(
     require(progress in (None, True, False), "progress", progress, "True, False or None")
     size = integer("chunk_size", chunk_size, 1) if chunk_size is not None else 0
     bar = _progress_bar(progress, n)
-    if not size and executor is None:  # one call for the grid, or ~20 for a progress bar (>= 32 points a thread)
-        size = n if bar is None else max(32 * threads, -(-n // 20))
+    if not size and executor is None:
+        # Calls of at most ~32 MB of estimates (the results are copied out of each call, so a larger call
+        # would hold them twice), or ~20 calls for a progress bar; at least 32 points a thread.
+        lines = excitation.harmonics.size
+        size = min(n, max(32 * threads, 2**25 // (72 * lines)))
+        if bar is not None:
+            size = min(size, max(32 * threads, -(-n // 20)))
     elif not size:  # equal work per worker: a multiple of `threads` chunks, up to eight each, of at least 32 points
         count = min(8 * threads, max(1, -(-n // 32)))
         count = -(-count // threads) * threads
