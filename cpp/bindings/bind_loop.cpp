@@ -7,13 +7,6 @@ namespace {
 using InputArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
 }
 
-void bind_cancel(py::module_& m) {
-    py::class_<CancelToken>(m, "CancelToken", "Stops the core calls it is given (cancel()) between blocks.")
-        .def(py::init<>())
-        .def("cancel", [](CancelToken& t) { t.cancelled = true; }, "Ask the calls holding this token to stop.")
-        .def_property_readonly("cancelled", [](const CancelToken& t) { return t.cancelled.load(); });
-}
-
 void bind_loop(py::module_& m) {
     m.def(
         "simulate",

@@ -32,7 +32,7 @@ void bind_sweep(py::module_& m) {
            const std::vector<Controller>& controllers,
            const Eigen::Ref<const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>>& settle_periods,
            const Eigen::Ref<const Eigen::Matrix<std::uint64_t, Eigen::Dynamic, 1>>& seeds, Eigen::Index periods,
-           const LinePlan& plan, int median_window, int workers, bool steady_start, CancelToken* token) {
+           const LinePlan& plan, int median_window, int workers, bool steady_start) {
             const auto n = static_cast<Eigen::Index>(controllers.size());
             if (static_cast<Eigen::Index>(rigs.size()) != n || settle_periods.size() != n || seeds.size() != n)
                 throw std::invalid_argument("rigs, controllers, settle_periods and seeds must have one entry per point");
@@ -43,14 +43,13 @@ void bind_sweep(py::module_& m) {
                 points.push_back({rigs[k], controllers[k], settle_periods[g], seeds[g]});
             }
             return interruptible(
-                [&] { return run_sweep(period_force, points, periods, plan, median_window, workers, steady_start); },
-                token);
+                [&] { return run_sweep(period_force, points, periods, plan, median_window, workers, steady_start); });
         },
         py::arg("period_force"), py::arg("rigs"), py::arg("controllers"), py::arg("settle_periods"), py::arg("seeds"),
         py::arg("periods"), py::arg("plan"), py::arg("median_window"), py::arg("workers"),
-        py::arg("steady_start") = false, py::arg("cancel") = nullptr,
+        py::arg("steady_start") = false,
         "Runs one experiment per point (rig, controller) on `workers` threads (<= 0: all cores), GIL released; "
-        "Ctrl-C or cancel.cancel() stops it.");
+        "Ctrl-C stops it.");
     m.def(
         "eigenvalues",
         [](const py::array_t<double, py::array::c_style | py::array::forcecast>& stack, int workers) {

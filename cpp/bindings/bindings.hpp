@@ -13,23 +13,16 @@
 
 namespace py = pybind11;
 
-// Lets Python stop a running core call: Ctrl-C, or cancel() from another Python thread (a sweep
-// cancelling its chunks).
-struct CancelToken {
-    std::atomic<bool> cancelled{false};
-};
-
-// Runs f with the GIL released and stoppable: the calling thread looks at Python's signals every
-// 50 ms between blocks (PyErr_CheckSignals, with the GIL taken for that moment), every computing
-// thread looks at the token. A stopped call raises KeyboardInterrupt (or the signal handler's error).
+// Runs f with the GIL released and stoppable by Ctrl-C: the calling thread looks at Python's signals
+// every 50 ms between blocks (PyErr_CheckSignals, with the GIL taken for that moment), every computing
+// thread at what it found. A stopped call raises KeyboardInterrupt (or the signal handler's error).
 template <class F>
-auto interruptible(F&& f, CancelToken* token = nullptr) {
+auto interruptible(F&& f) {
     std::atomic<bool> signalled{false};
     const auto caller = std::this_thread::get_id();
     auto last = std::chrono::steady_clock::now();
     const amb_fast::InterruptCheck check = [&]() -> bool {
         if (signalled.load(std::memory_order_relaxed)) return true;
-        if (token && token->cancelled.load(std::memory_order_relaxed)) return true;
         if (std::this_thread::get_id() != caller) return false;
         const auto now = std::chrono::steady_clock::now();
         if (now - last < std::chrono::milliseconds(50)) return false;
@@ -44,8 +37,7 @@ auto interruptible(F&& f, CancelToken* token = nullptr) {
         const amb_fast::ScopedInterruptCheck installed(&check);
         return f();
     } catch (const amb_fast::Interrupted&) {
-        if (!signalled) PyErr_SetNone(PyExc_KeyboardInterrupt);  // cancelled through the token
-        throw py::error_already_set();
+        throw py::error_already_set();  // the error PyErr_CheckSignals set
     }
 }
 
@@ -53,5 +45,4 @@ void bind_params(py::module_& m);
 void bind_loop(py::module_& m);
 void bind_spectrum(py::module_& m);
 void bind_sweep(py::module_& m);
-void bind_cancel(py::module_& m);
 void bind_mimo(py::module_& m);

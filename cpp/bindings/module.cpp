@@ -7,7 +7,6 @@ PYBIND11_MODULE(_core, m) {
     bind_loop(m);
     bind_spectrum(m);
     bind_sweep(m);
-    bind_cancel(m);
     bind_mimo(m);
 
     // Touchdown is an event with a time and a place: amb_fast.TouchdownError carries both.
