@@ -186,7 +186,6 @@ SteadyLines::SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eig
 void SteadyLines::start(const double* period_force, std::uint64_t seed) {
     const Eigen::Index p = model_.forces(), q = model_.probes(), m = p + q;
     const auto B = static_cast<Eigen::Index>(bins_.size());
-    require_finite_samples("excitation", period_force, L_ * p);
     // The forces' lines, the probes' periodic response to them, the recorded (transduced) force lines.
     // The last few channels transformed (on any thread), kept: a sweep's points, repeated experiments and
     // the two-axis pair (s and -s) share their excitations, and comparing one costs a twentieth of its

@@ -226,17 +226,8 @@ class PID:
         derivative's (pole a), using ``(1 - z^-1)/(1 - a z^-1) = 1 + (a - 1) z^-1/(1 - a z^-1)``.
         """
         integral_in, derivative_out, D = self._terms(self.kp, self.ki, self.kd)
-        poles: list[float] = []
-        inputs: list[float] = []
-        outputs: list[float] = []
-        if self.ki != 0:
-            poles.append(1.0)
-            inputs.append(integral_in)
-            outputs.append(1.0)
-        if self.kd != 0:
-            poles.append(self._derivative_pole())
-            inputs.append(1.0)
-            outputs.append(derivative_out)
+        a = self._derivative_pole()
+        poles, inputs, outputs = _modal(self.ki != 0, self.kd != 0, integral_in, derivative_out, a)
         m = len(poles)
         A = np.diag(poles).reshape(m, m)
         B = np.array(inputs, dtype=float).reshape(m, 1)
@@ -265,17 +256,27 @@ class PID:
         kp, ki, kd = (np.ascontiguousarray(gains[:, j], dtype=float) for j in range(3))
         integral_in, derivative_out, D = self._terms(kp, ki, kd)
         a = self._derivative_pole()
-        A = {(i, d): np.diag([1.0] * i + [a] * d).reshape(i + d, i + d) for i in (0, 1) for d in (0, 1)}
+        A = {}  # the poles depend only on which states there are
         out = []
-        for j, (with_i, with_d) in enumerate(zip((ki != 0).tolist(), (kd != 0).tolist())):
-            B = [integral_in[j]] * with_i + [1.0] * with_d
-            C = [1.0] * with_i + [derivative_out[j]] * with_d
-            out.append(_core.Controller(A=A[with_i, with_d], B=np.array(B), C=np.array(C), D=float(D[j]), fs=self.fs,
+        for j, shape in enumerate(zip((ki != 0).tolist(), (kd != 0).tolist())):
+            poles, B, C = _modal(*shape, integral_in[j], derivative_out[j], a)
+            if shape not in A:
+                A[shape] = np.diag(poles).reshape(len(poles), len(poles))
+            out.append(_core.Controller(A=A[shape], B=np.array(B), C=np.array(C), D=float(D[j]), fs=self.fs,
                                         delay=self.delay))  # fmt: skip
         return out
 
     def _to_core(self) -> _core.Controller:
         return _core_pid(self)
+
+
+def _modal(
+    with_integral: bool, with_derivative: bool, integral_in: float, derivative_out: float, pole: float
+) -> tuple[list[float], list[float], list[float]]:
+    """A PID's modal states, their poles, inputs and outputs: the integral's (pole 1) where ki != 0, then
+    the derivative's (pole ``pole``) where kd != 0 (:meth:`PID.state_space`)."""
+    i, d = int(with_integral), int(with_derivative)
+    return [1.0] * i + [pole] * d, [integral_in] * i + [1.0] * d, [1.0] * i + [derivative_out] * d
 
 
 # The core's copies of the parameters, made once per distinct value (the dataclasses are frozen).

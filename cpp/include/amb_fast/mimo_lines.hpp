@@ -45,8 +45,9 @@ class SteadyLines {
 public:
     // bins strictly between 0 and L/2.
     SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eigen::Index> bins);
-    // A new experiment: period_force (L x p, sample-major) repeated forever, noise from seed; the state
-    // starts in its periodic steady state, the noise-driven part drawn from its stationary distribution.
+    // A new experiment: period_force (L x p, sample-major, finite: the callers check it) repeated forever,
+    // noise from seed; the state starts in its periodic steady state, the noise-driven part drawn from
+    // its stationary distribution.
     void start(const double* period_force, std::uint64_t seed);
     // The next period's line spectra: force_lines[line * p + channel] (the recorded, transduced force with
     // the transducer's noise), displacement_lines[line * q + probe]. Throws std::overflow_error when they
