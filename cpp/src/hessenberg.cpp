@@ -1,37 +1,197 @@
 #include "amb_fast/hessenberg.hpp"
 
+#include <cstring>
 #include <stdexcept>
+
+#include "amb_fast/inline.hpp"
+#include "amb_fast/lanes.hpp"
 
 namespace amb_fast {
 
 using cd = std::complex<double>;
 
 namespace {
-// One number of every lane (shift): Eigen's fixed-size arrays, which compile to whole SIMD registers.
-using Shifted = Eigen::Array<double, HessenbergLU::lanes, 1>;
-using ShiftedAt = Eigen::Map<Shifted>;
-using ConstShiftedAt = Eigen::Map<const Shifted>;
+constexpr int K = HessenbergLU::lanes;
 
-// a -= m b, complex, lane by lane (real and imaginary parts apart).
-template <class A, class M, class B>
-void subtract_product(A&& ar, A&& ai, const M& mr, const M& mi, const B& br, const B& bi) {
-    ar -= mr * br - mi * bi;
-    ai -= mr * bi + mi * br;
+// One number of every lane (shift). GCC's and Clang's vector type where there is one: whole SIMD
+// registers, AVX2 ones in the kernels built for it. Elsewhere four doubles with the same operations.
+#if AMB_FAST_LANES_OK
+using Shifted = Lanes<K>;
+AMB_FAST_ALWAYS_INLINE Shifted where_greater(const Shifted& x, const Shifted& y, const Shifted& a, const Shifted& b) {
+    return x > y ? a : b;
+}
+#else
+struct Shifted {
+    double v[K];
+    double& operator[](int l) { return v[l]; }
+    double operator[](int l) const { return v[l]; }
+};
+#define AMB_FAST_LANEWISE(op)                                                       \
+    inline Shifted operator op(const Shifted& a, const Shifted& b) {              \
+        Shifted c;                                                                 \
+        for (int l = 0; l < K; ++l) c[l] = a[l] op b[l];                           \
+        return c;                                                                  \
+    }
+AMB_FAST_LANEWISE(+)
+AMB_FAST_LANEWISE(-)
+AMB_FAST_LANEWISE(*)
+AMB_FAST_LANEWISE(/)
+#undef AMB_FAST_LANEWISE
+inline Shifted operator-(const Shifted& a) { return Shifted{} - a; }
+inline Shifted& operator-=(Shifted& a, const Shifted& b) { return a = a - b; }
+inline Shifted where_greater(const Shifted& x, const Shifted& y, const Shifted& a, const Shifted& b) {
+    Shifted c;
+    for (int l = 0; l < K; ++l) c[l] = x[l] > y[l] ? a[l] : b[l];
+    return c;
+}
+#endif
+
+// Loads and stores at any address (a std::vector<double> is not aligned to a whole vector).
+AMB_FAST_ALWAYS_INLINE Shifted load(const double* p) {
+    Shifted x;
+    std::memcpy(&x, p, sizeof x);
+    return x;
+}
+AMB_FAST_ALWAYS_INLINE void store(double* p, const Shifted& x) { std::memcpy(p, &x, sizeof x); }
+AMB_FAST_ALWAYS_INLINE Shifted broadcast(double x) {
+    Shifted v;
+    for (int l = 0; l < K; ++l) v[l] = x;
+    return v;
+}
+
+// a -= m b, complex, lane by lane (real and imaginary parts apart), a at a_r, a_i.
+AMB_FAST_ALWAYS_INLINE void subtract_product(double* a_r, double* a_i, const Shifted& mr, const Shifted& mi, const Shifted& br,
+                                             const Shifted& bi) {
+    store(a_r, load(a_r) - (mr * br - mi * bi));
+    store(a_i, load(a_i) - (mr * bi + mi * br));
+}
+
+// Rows a and b exchanged in the lanes where `swapped` is 1 (0 elsewhere).
+AMB_FAST_ALWAYS_INLINE void exchange_where(const Shifted& swapped, double* ar, double* ai, double* br, double* bi) {
+    const Shifted half = broadcast(0.5);
+    const Shifted a_r = load(ar), a_i = load(ai), b_r = load(br), b_i = load(bi);
+    store(ar, where_greater(swapped, half, b_r, a_r));
+    store(ai, where_greater(swapped, half, b_i, a_i));
+    store(br, where_greater(swapped, half, a_r, b_r));
+    store(bi, where_greater(swapped, half, a_i, b_i));
 }
 
 // x = s d, complex, lane by lane (d: a stored 1 / pivot).
-void set_product(ShiftedAt xr, ShiftedAt xi, const Shifted& sr, const Shifted& si, ConstShiftedAt dr, ConstShiftedAt di) {
-    xr = sr * dr - si * di;
-    xi = sr * di + si * dr;
+AMB_FAST_ALWAYS_INLINE void set_product(double* xr, double* xi, const Shifted& sr, const Shifted& si, const double* dr,
+                                        const double* di) {
+    const Shifted d_r = load(dr), d_i = load(di);
+    store(xr, sr * d_r - si * d_i);
+    store(xi, sr * d_i + si * d_r);
 }
 
-// Rows a and b exchanged in the lanes where `swap` holds.
-template <class Mask>
-void exchange_where(const Mask& swap, ShiftedAt ar, ShiftedAt ai, ShiftedAt br, ShiftedAt bi) {
-    const Shifted r = ar, i = ai;
-    ar = swap.select(br, r), ai = swap.select(bi, i);
-    br = swap.select(r, br), bi = swap.select(i, bi);
+// The factors' storage, as HessenbergLU lays it out (see its members): written by the factorisation
+// (T = double), read by the solves (T = const double).
+template <class T>
+struct FactorsOf {
+    Eigen::Index n;
+    const double* H;  // row-major
+    T *ur, *ui, *dr, *di, *mr, *mi, *swapped;
+};
+using Factors = FactorsOf<double>;
+using ConstFactors = FactorsOf<const double>;
+
+// Returns false where a pivot is exactly zero (z a pole of the loop).
+AMB_FAST_ALWAYS_INLINE bool factor_kernel(const Factors& f, const cd* z) {
+    const Eigen::Index n = f.n;
+    const auto U_r = [&](Eigen::Index i, Eigen::Index c) { return f.ur + (i * n + c) * K; };
+    const auto U_i = [&](Eigen::Index i, Eigen::Index c) { return f.ui + (i * n + c) * K; };
+    const Shifted zero = broadcast(0.0), one = broadcast(1.0);
+    for (Eigen::Index i = 0; i < n; ++i)
+        for (Eigen::Index c = 0; c < n; ++c) {
+            store(U_r(i, c), broadcast(-f.H[i * n + c]));
+            store(U_i(i, c), zero);
+        }
+    for (Eigen::Index i = 0; i < n; ++i) {
+        Shifted zr, zi;
+        for (int l = 0; l < K; ++l) zr[l] = z[l].real(), zi[l] = z[l].imag();
+        store(U_r(i, i), load(U_r(i, i)) + zr);
+        store(U_i(i, i), zi);
+    }
+    for (Eigen::Index j = 0; j < n; ++j) {
+        if (j + 1 < n) {  // pivot: the larger of rows j and j + 1 in column j, lane by lane
+            const Shifted below = load(U_r(j + 1, j)) * load(U_r(j + 1, j)) + load(U_i(j + 1, j)) * load(U_i(j + 1, j));
+            const Shifted here = load(U_r(j, j)) * load(U_r(j, j)) + load(U_i(j, j)) * load(U_i(j, j));
+            const Shifted swap = where_greater(below, here, one, zero);
+            store(f.swapped + j * K, swap);
+            bool any = false;
+            for (int l = 0; l < K; ++l) any = any || swap[l] != 0.0;
+            if (any)
+                for (Eigen::Index c = j; c < n; ++c) exchange_where(swap, U_r(j, c), U_i(j, c), U_r(j + 1, c), U_i(j + 1, c));
+        }
+        // 1 / x = conj(x) / |x|^2 (a pivot of a well-conditioned matrix: no scaling)
+        const Shifted a = load(U_r(j, j)), b = load(U_i(j, j)), norm = a * a + b * b;
+        for (int l = 0; l < K; ++l)
+            if (norm[l] == 0.0) return false;
+        const Shifted inv_r = a / norm, inv_i = -b / norm;
+        store(f.dr + j * K, inv_r);
+        store(f.di + j * K, inv_i);
+        if (j + 1 == n) break;
+        const Shifted lr = load(U_r(j + 1, j)), li = load(U_i(j + 1, j));
+        const Shifted m_r = lr * inv_r - li * inv_i, m_i = lr * inv_i + li * inv_r;
+        store(f.mr + j * K, m_r);
+        store(f.mi + j * K, m_i);
+        store(U_r(j + 1, j), zero);
+        store(U_i(j + 1, j), zero);
+        for (Eigen::Index c = j + 1; c < n; ++c) subtract_product(U_r(j + 1, c), U_i(j + 1, c), m_r, m_i, load(U_r(j, c)), load(U_i(j, c)));
+    }
+    return true;
 }
+
+AMB_FAST_ALWAYS_INLINE void solve_kernel(const ConstFactors& f, double* re, double* im) {
+    const Eigen::Index n = f.n;
+    for (Eigen::Index j = 0; j + 1 < n; ++j) {  // the row operations: swaps and eliminations
+        exchange_where(load(f.swapped + j * K), re + j * K, im + j * K, re + (j + 1) * K, im + (j + 1) * K);
+        subtract_product(re + (j + 1) * K, im + (j + 1) * K, load(f.mr + j * K), load(f.mi + j * K), load(re + j * K),
+                         load(im + j * K));
+    }
+    for (Eigen::Index i = n - 1; i >= 0; --i) {  // back substitution with U
+        Shifted sr = load(re + i * K), si = load(im + i * K);
+        for (Eigen::Index c = i + 1; c < n; ++c) {
+            const Shifted ur = load(f.ur + (i * n + c) * K), ui = load(f.ui + (i * n + c) * K);
+            const Shifted xr = load(re + c * K), xi = load(im + c * K);
+            sr -= ur * xr - ui * xi;
+            si -= ur * xi + ui * xr;
+        }
+        set_product(re + i * K, im + i * K, sr, si, f.dr + i * K, f.di + i * K);
+    }
+}
+
+AMB_FAST_ALWAYS_INLINE void solve_transposed_kernel(const ConstFactors& f, double* re, double* im) {
+    const Eigen::Index n = f.n;
+    for (Eigen::Index i = 0; i < n; ++i) {  // U^T t = b
+        Shifted sr = load(re + i * K), si = load(im + i * K);
+        for (Eigen::Index k = 0; k < i; ++k) {
+            const Shifted ur = load(f.ur + (k * n + i) * K), ui = load(f.ui + (k * n + i) * K);
+            const Shifted xr = load(re + k * K), xi = load(im + k * K);
+            sr -= ur * xr - ui * xi;
+            si -= ur * xi + ui * xr;
+        }
+        set_product(re + i * K, im + i * K, sr, si, f.dr + i * K, f.di + i * K);
+    }
+    for (Eigen::Index j = n - 2; j >= 0; --j) {  // then the row operations transposed, last first
+        subtract_product(re + j * K, im + j * K, load(f.mr + j * K), load(f.mi + j * K), load(re + (j + 1) * K),
+                         load(im + (j + 1) * K));
+        exchange_where(load(f.swapped + j * K), re + j * K, im + j * K, re + (j + 1) * K, im + (j + 1) * K);
+    }
+}
+
+// Each kernel built twice: for any processor of the architecture, and for AVX2 (four lanes in one
+// register), chosen at run time (simd_avx2). The same operations in the same order, so the same digits.
+bool factor_portable(const Factors& f, const cd* z) { return factor_kernel(f, z); }
+void solve_portable(const ConstFactors& f, double* re, double* im) { solve_kernel(f, re, im); }
+void solve_transposed_portable(const ConstFactors& f, double* re, double* im) { solve_transposed_kernel(f, re, im); }
+#if AMB_FAST_WIDE_LANES
+__attribute__((target("avx2"))) bool factor_avx2(const Factors& f, const cd* z) { return factor_kernel(f, z); }
+__attribute__((target("avx2"))) void solve_avx2(const ConstFactors& f, double* re, double* im) { solve_kernel(f, re, im); }
+__attribute__((target("avx2"))) void solve_transposed_avx2(const ConstFactors& f, double* re, double* im) {
+    solve_transposed_kernel(f, re, im);
+}
+#endif
 }  // namespace
 
 HessenbergLU::HessenbergLU(const Eigen::MatrixXd& H)
@@ -46,78 +206,29 @@ HessenbergLU::HessenbergLU(const Eigen::MatrixXd& H)
       swapped_(dr_.size()) {}
 
 void HessenbergLU::factor(const cd* z) {
-    const Eigen::Index n = n_;
-    const auto U_r = [&](Eigen::Index i, Eigen::Index c) { return ShiftedAt(ur_.data() + (i * n + c) * lanes); };
-    const auto U_i = [&](Eigen::Index i, Eigen::Index c) { return ShiftedAt(ui_.data() + (i * n + c) * lanes); };
-    Shifted zr, zi;
-    for (int l = 0; l < lanes; ++l) zr[l] = z[l].real(), zi[l] = z[l].imag();
-    for (Eigen::Index i = 0; i < n; ++i)
-        for (Eigen::Index c = 0; c < n; ++c) {
-            U_r(i, c).setConstant(-H_(i, c));
-            U_i(i, c).setZero();
-        }
-    for (Eigen::Index i = 0; i < n; ++i) {
-        U_r(i, i) += zr;
-        U_i(i, i) = zi;
-    }
-    for (Eigen::Index j = 0; j < n; ++j) {
-        if (j + 1 < n) {  // pivot: the larger of rows j and j + 1 in column j, lane by lane
-            const auto swap = (U_r(j + 1, j).square() + U_i(j + 1, j).square() >
-                               U_r(j, j).square() + U_i(j, j).square()).eval();
-            ShiftedAt(swapped_.data() + j * lanes) = swap.cast<double>();
-            for (Eigen::Index c = j; c < n && swap.any(); ++c) exchange_where(swap, U_r(j, c), U_i(j, c), U_r(j + 1, c), U_i(j + 1, c));
-        }
-        // 1 / x = conj(x) / |x|^2 (a pivot of a well-conditioned matrix: no scaling)
-        const Shifted a = U_r(j, j), b = U_i(j, j), norm = a.square() + b.square();
-        if ((norm == 0.0).any()) throw std::invalid_argument("zI - H is singular: z is a pole of the loop");
-        const Shifted inv_r = a / norm, inv_i = -b / norm;
-        ShiftedAt(dr_.data() + j * lanes) = inv_r;
-        ShiftedAt(di_.data() + j * lanes) = inv_i;
-        if (j + 1 == n) break;
-        const Shifted lr = U_r(j + 1, j), li = U_i(j + 1, j);
-        const Shifted m_r = lr * inv_r - li * inv_i, m_i = lr * inv_i + li * inv_r;
-        ShiftedAt(mr_.data() + j * lanes) = m_r;
-        ShiftedAt(mi_.data() + j * lanes) = m_i;
-        U_r(j + 1, j).setZero();
-        U_i(j + 1, j).setZero();
-        for (Eigen::Index c = j + 1; c < n; ++c) subtract_product(U_r(j + 1, c), U_i(j + 1, c), m_r, m_i, U_r(j, c), U_i(j, c));
-    }
+    const Factors f{n_, H_.data(), ur_.data(), ui_.data(), dr_.data(), di_.data(), mr_.data(), mi_.data(), swapped_.data()};
+#if AMB_FAST_WIDE_LANES
+    const bool regular = simd_avx2() ? factor_avx2(f, z) : factor_portable(f, z);
+#else
+    const bool regular = factor_portable(f, z);
+#endif
+    if (!regular) throw std::invalid_argument("zI - H is singular: z is a pole of the loop");
 }
 
 void HessenbergLU::solve(double* re, double* im) const {
-    const Eigen::Index n = n_;
-    const auto x_r = [&](Eigen::Index i) { return ShiftedAt(re + i * lanes); };
-    const auto x_i = [&](Eigen::Index i) { return ShiftedAt(im + i * lanes); };
-    for (Eigen::Index j = 0; j + 1 < n; ++j) {  // the row operations: swaps and eliminations
-        exchange_where((ConstShiftedAt(swapped_.data() + j * lanes) != 0.0).eval(), x_r(j), x_i(j), x_r(j + 1), x_i(j + 1));
-        subtract_product(x_r(j + 1), x_i(j + 1), ConstShiftedAt(mr_.data() + j * lanes), ConstShiftedAt(mi_.data() + j * lanes),
-                         x_r(j), x_i(j));
-    }
-    for (Eigen::Index i = n - 1; i >= 0; --i) {  // back substitution with U
-        Shifted sr = x_r(i), si = x_i(i);
-        for (Eigen::Index c = i + 1; c < n; ++c)
-            subtract_product(sr, si, ConstShiftedAt(ur_.data() + (i * n + c) * lanes),
-                             ConstShiftedAt(ui_.data() + (i * n + c) * lanes), x_r(c), x_i(c));
-        set_product(x_r(i), x_i(i), sr, si, ConstShiftedAt(dr_.data() + i * lanes), ConstShiftedAt(di_.data() + i * lanes));
-    }
+    const ConstFactors f{n_, H_.data(), ur_.data(), ui_.data(), dr_.data(), di_.data(), mr_.data(), mi_.data(), swapped_.data()};
+#if AMB_FAST_WIDE_LANES
+    if (simd_avx2()) return solve_avx2(f, re, im);
+#endif
+    solve_portable(f, re, im);
 }
 
 void HessenbergLU::solve_transposed(double* re, double* im) const {
-    const Eigen::Index n = n_;
-    const auto x_r = [&](Eigen::Index i) { return ShiftedAt(re + i * lanes); };
-    const auto x_i = [&](Eigen::Index i) { return ShiftedAt(im + i * lanes); };
-    for (Eigen::Index i = 0; i < n; ++i) {  // U^T t = b
-        Shifted sr = x_r(i), si = x_i(i);
-        for (Eigen::Index k = 0; k < i; ++k)
-            subtract_product(sr, si, ConstShiftedAt(ur_.data() + (k * n + i) * lanes),
-                             ConstShiftedAt(ui_.data() + (k * n + i) * lanes), x_r(k), x_i(k));
-        set_product(x_r(i), x_i(i), sr, si, ConstShiftedAt(dr_.data() + i * lanes), ConstShiftedAt(di_.data() + i * lanes));
-    }
-    for (Eigen::Index j = n - 2; j >= 0; --j) {  // then the row operations transposed, last first
-        subtract_product(x_r(j), x_i(j), ConstShiftedAt(mr_.data() + j * lanes), ConstShiftedAt(mi_.data() + j * lanes),
-                         x_r(j + 1), x_i(j + 1));
-        exchange_where((ConstShiftedAt(swapped_.data() + j * lanes) != 0.0).eval(), x_r(j), x_i(j), x_r(j + 1), x_i(j + 1));
-    }
+    const ConstFactors f{n_, H_.data(), ur_.data(), ui_.data(), dr_.data(), di_.data(), mr_.data(), mi_.data(), swapped_.data()};
+#if AMB_FAST_WIDE_LANES
+    if (simd_avx2()) return solve_transposed_avx2(f, re, im);
+#endif
+    solve_transposed_portable(f, re, im);
 }
 
 }  // namespace amb_fast

@@ -1,7 +1,6 @@
 #include "amb_fast/mimo.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cstring>
 #include <utility>
 #include <cstdlib>
@@ -11,6 +10,7 @@
 
 #include "amb_fast/errors.hpp"
 #include "amb_fast/interrupt.hpp"
+#include "amb_fast/lanes.hpp"
 #include "amb_fast/steady.hpp"
 
 namespace amb_fast {
@@ -298,31 +298,17 @@ void advance_portable(Step& st) {
     advance<K, P>(st);
 }
 
-#if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
-#define AMB_FAST_MIMO_AVX2 1
+#if AMB_FAST_WIDE_LANES
 template <int K, int P>
 __attribute__((target("avx2"))) void advance_avx2(Step& st) {
     advance<K, P>(st);
 }
-bool has_avx2() {
-    static const bool yes = __builtin_cpu_supports("avx2");
-    return yes;
-}
-#else
-bool has_avx2() { return false; }
 #endif
-
-std::atomic<int> forced_kernel{static_cast<int>(MimoKernel::automatic)};
-
-bool use_avx2() {
-    const auto kernel = static_cast<MimoKernel>(forced_kernel.load(std::memory_order_relaxed));
-    return kernel != MimoKernel::portable && has_avx2();
-}
 
 template <int K, int P>
 void advance_any(Step& st) {
-#ifdef AMB_FAST_MIMO_AVX2
-    if (use_avx2()) return advance_avx2<K, P>(st);
+#if AMB_FAST_WIDE_LANES
+    if (simd_avx2()) return advance_avx2<K, P>(st);
 #endif
     advance_portable<K, P>(st);
 }
@@ -336,10 +322,6 @@ void advance_lanes(Step& st, int pass) {
     }
 }
 }  // namespace
-
-void set_mimo_kernel(MimoKernel kernel) { forced_kernel.store(static_cast<int>(kernel), std::memory_order_relaxed); }
-
-const char* mimo_kernel_name() { return has_avx2() ? "avx2" : "portable"; }
 
 template <int K>
 void MimoLoop::run_block(const double* const* force, Eigen::Index start, Eigen::Index m, double* const* recorded,

@@ -15,6 +15,8 @@
 #include "amb_fast/batch.hpp"
 #include "amb_fast/errors.hpp"
 #include "amb_fast/experiment.hpp"
+#include "amb_fast/hessenberg.hpp"
+#include "amb_fast/lanes.hpp"
 #include "amb_fast/loop.hpp"
 #include "amb_fast/random.hpp"
 #include "amb_fast/mimo_lines.hpp"
@@ -416,8 +418,8 @@ int main() {
         for (auto& x : f) x = uniform();
         for (const std::size_t lanes : {std::size_t{1}, std::size_t{2}}) {
             std::vector<std::vector<double>> results;
-            for (const MimoKernel kernel : {MimoKernel::portable, MimoKernel::avx2}) {
-                set_mimo_kernel(kernel);
+            for (const SimdKernel kernel : {SimdKernel::portable, SimdKernel::avx2}) {
+                set_simd_kernel(kernel);
                 std::vector<double> rec(static_cast<std::size_t>(L * p * 2)), out(static_cast<std::size_t>(L * r * 2));
                 const double* forces[2] = {f.data(), f.data()};
                 double* recs[2] = {rec.data(), rec.data() + L * p};
@@ -431,8 +433,8 @@ int main() {
                 out.resize(static_cast<std::size_t>(L * r * static_cast<Eigen::Index>(lanes)));
                 results.push_back(out);
             }
-            set_mimo_kernel(MimoKernel::automatic);
-            check(results[0] == results[1], std::string("MIMO kernels bit-identical (") + mimo_kernel_name() + ", " +
+            set_simd_kernel(SimdKernel::automatic);
+            check(results[0] == results[1], std::string("MIMO kernels bit-identical (") + simd_kernel_name() + ", " +
                                                 std::to_string(lanes) + " lane(s))");
             // Reference: the same noise draws (the loop's streams), the recursion with Eigen.
             MimoModel quiet = model;
@@ -490,6 +492,21 @@ int main() {
             worst = std::max({worst, (x - want_x).norm() / want_x.norm(), (y - want_y).norm() / want_y.norm()});
         }
         check(same_in_any_lane, "Hessenberg LU: a shift's solution does not depend on its lane");
+        // The portable and the AVX2 builds of the kernels: the same bits.
+        std::vector<std::vector<double>> built;
+        for (const SimdKernel kernel : {SimdKernel::portable, SimdKernel::avx2}) {
+            set_simd_kernel(kernel);
+            HessenbergLU again(H);
+            again.factor(rotated);
+            std::vector<double> ar(n * 4), ai(n * 4), br(n * 4), bi(n * 4);
+            for (Eigen::Index i = 0; i < n * 4; ++i) ar[i] = br[i] = std::cos(0.3 * i), ai[i] = bi[i] = std::sin(0.7 * i);
+            again.solve(ar.data(), ai.data());
+            again.solve_transposed(br.data(), bi.data());
+            for (auto* v : {&ai, &br, &bi}) ar.insert(ar.end(), v->begin(), v->end());
+            built.push_back(ar);
+        }
+        set_simd_kernel(SimdKernel::automatic);
+        check(built[0] == built[1], std::string("Hessenberg LU kernels bit-identical (") + simd_kernel_name() + ")");
         check(worst < 1e-12, "Hessenberg LU solves equal dense LU (" + std::to_string(worst) + ")");
     }
 

@@ -5,6 +5,7 @@
 // independent chains interleaved cost little more than one.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <memory>
 #include <new>
@@ -112,6 +113,23 @@ private:
     std::unique_ptr<T[], Free> data_;
     std::size_t size_ = 0;
 };
+
+// Which build of the SIMD kernels runs (the MIMO loop's step, the per-line Hessenberg solves): chosen
+// at run time (AVX2 where the processor has it, on x86-64), or forced, for tests. Both give
+// bit-identical results (the same operations in the same order; no fused multiply-add).
+enum class SimdKernel { automatic, portable, avx2 };
+inline std::atomic<int>& forced_simd_kernel() {
+    static std::atomic<int> kernel{static_cast<int>(SimdKernel::automatic)};
+    return kernel;
+}
+// avx2 falls back to portable where the processor lacks it.
+inline void set_simd_kernel(SimdKernel kernel) { forced_simd_kernel().store(static_cast<int>(kernel), std::memory_order_relaxed); }
+inline bool simd_avx2() {
+    return static_cast<SimdKernel>(forced_simd_kernel().load(std::memory_order_relaxed)) != SimdKernel::portable &&
+           wide_lanes_available();
+}
+// The build automatic picks here: "avx2" or "portable".
+inline const char* simd_kernel_name() { return wide_lanes_available() ? "avx2" : "portable"; }
 
 // How many loops run side by side on this processor.
 inline int lanes_available() { return wide_lanes_available() ? wide_lanes : loop_lanes; }

@@ -83,13 +83,6 @@ private:
     Eigen::Index k_ = 0;
 };
 
-// Which kernel advances the MIMO loop: chosen at run time (AVX2 where the processor has it, on x86-64),
-// or forced, for tests. Both give bit-identical results (same operations in the same order; no
-// fused multiply-add).
-enum class MimoKernel { automatic, portable, avx2 };
-void set_mimo_kernel(MimoKernel kernel);  // avx2 falls back to portable where the processor lacks it
-const char* mimo_kernel_name();           // the kernel automatic picks here: "avx2" or "portable"
-
 // Seed of noise source j of a kind (0: probe, 1: force transducer, 2: transducer lines, 3: the state's
 // line-free part): splitmix64 of the run's seed, the kind and j, so every source has its own stream.
 std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t kind, Eigen::Index j);
