@@ -95,9 +95,7 @@ SteadyLines::SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eig
     T_inverse_ = Q.transpose() * scale.cwiseInverse().asDiagonal();
     Eigen::MatrixXd inputs(n, m);
     inputs << model_.Bf, model_.Bn;
-    const Eigen::MatrixXcd Bt = (T_inverse_ * inputs).cast<cd>();
-    const Eigen::MatrixXcd Ct = (model_.C.topRows(q) * T).cast<cd>();
-    const Eigen::MatrixXcd Dn = model_.Dn.topRows(q).cast<cd>();
+    const Eigen::MatrixXd Bt = T_inverse_ * inputs, Ct = model_.C.topRows(q) * T;
     const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
     ML_ = matrix_power(model_.M, L);
     const Eigen::MatrixXd W = (I - ML_) * T;  // the state change over a period, from Hessenberg coordinates
@@ -115,15 +113,15 @@ SteadyLines::SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eig
         z_[static_cast<std::size_t>(k)] = std::polar(
             1.0, 2.0 * pi * static_cast<double>(bins_[static_cast<std::size_t>(k)]) / static_cast<double>(L));
     // Four lines at a time (the last group padded with its last line), each lane's solutions copied out.
+    // Bt and Ct are real, so G's entries are sums of real times complex, summed in the lanes.
     constexpr int lanes = HessenbergLU::lanes;
     HessenbergLU lu(H);
     std::vector<double> re(static_cast<std::size_t>(n * lanes)), im(re.size());
-    const auto load = [&](const auto& b) {  // the same right-hand side in every lane
+    const auto at = [](Eigen::Index i, int l) { return static_cast<std::size_t>(i * lanes + l); };
+    const auto load = [&](const auto& b) {  // the same real right-hand side in every lane
         for (Eigen::Index i = 0; i < n; ++i)
-            for (int l = 0; l < lanes; ++l)
-                re[static_cast<std::size_t>(i * lanes + l)] = b[i].real(), im[static_cast<std::size_t>(i * lanes + l)] = b[i].imag();
+            for (int l = 0; l < lanes; ++l) re[at(i, l)] = b[i], im[at(i, l)] = 0.0;
     };
-    std::vector<Eigen::MatrixXcd> CR(lanes, Eigen::MatrixXcd(q, n));
     for (Eigen::Index k0 = 0; k0 < B; k0 += lanes) {
         if (k0 % 64 == 0) poll_interrupt();
         const Eigen::Index count = std::min<Eigen::Index>(lanes, B - k0);
@@ -135,39 +133,40 @@ SteadyLines::SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eig
             lu.solve(re.data(), im.data());
             for (Eigen::Index l = 0; l < count; ++l)
                 for (Eigen::Index i = 0; i < n; ++i) {
-                    Xn_(i, 2 * ((k0 + l) * q + j)) = re[static_cast<std::size_t>(i * lanes + l)];
-                    Xn_(i, 2 * ((k0 + l) * q + j) + 1) = -im[static_cast<std::size_t>(i * lanes + l)];
+                    Xn_(i, 2 * ((k0 + l) * q + j)) = re[at(i, static_cast<int>(l))];
+                    Xn_(i, 2 * ((k0 + l) * q + j) + 1) = -im[at(i, static_cast<int>(l))];
                 }
         }
         for (Eigen::Index i = 0; i < q; ++i) {
             load(Ct.row(i));
-            lu.solve_transposed(re.data(), im.data());
-            for (Eigen::Index l = 0; l < count; ++l)
-                for (Eigen::Index c = 0; c < n; ++c)
-                    CR[static_cast<std::size_t>(l)](i, c) = {re[static_cast<std::size_t>(c * lanes + l)],
-                                                             im[static_cast<std::size_t>(c * lanes + l)]};
-        }
-        for (Eigen::Index l = 0; l < count; ++l) {
-            const Eigen::Index k = k0 + l;
-            const cd zk = z_[static_cast<std::size_t>(k)];
-            const Eigen::MatrixXcd& R = CR[static_cast<std::size_t>(l)];
-            G_.middleCols(k * m, m).noalias() = R.lazyProduct(Bt);  // tiny: no blocked product
-            G_.middleCols(k * m + p, q) += Dn;
-            CRz_re_.middleRows(k * q, q) = (zk * R).real();
-            CRz_im_.middleRows(k * q, q) = (zk * R).imag();
+            lu.solve_transposed(re.data(), im.data());  // row i of C (zI - M)^-1 T, per lane
+            for (Eigen::Index c = 0; c < m; ++c) {  // G(i, c) = that row times column c of Bt
+                double g_re[lanes] = {}, g_im[lanes] = {};
+                for (Eigen::Index s = 0; s < n; ++s)
+                    for (int l = 0; l < lanes; ++l) g_re[l] += re[at(s, l)] * Bt(s, c), g_im[l] += im[at(s, l)] * Bt(s, c);
+                const double direct = c >= p ? model_.Dn(i, c - p) : 0.0;
+                for (Eigen::Index l = 0; l < count; ++l) G_(i, (k0 + l) * m + c) = cd(g_re[l] + direct, g_im[l]);
+            }
+            for (Eigen::Index l = 0; l < count; ++l) {
+                const cd zk = z_[static_cast<std::size_t>(k0 + l)];
+                for (Eigen::Index s = 0; s < n; ++s) {
+                    const cd r = zk * cd(re[at(s, static_cast<int>(l))], im[at(s, static_cast<int>(l))]);
+                    CRz_re_((k0 + l) * q + i, s) = r.real();
+                    CRz_im_((k0 + l) * q + i, s) = r.imag();
+                }
+            }
         }
     }
     // The noise's state: stationary covariance P; over a period w = zL - M^L z0 has covariance
     // P - M^L P M^LT, of which the lines' spectra explain (2 / L) sum sigma^2 Re(S S^H), S = W Xn.
     const Eigen::MatrixXd P = stationary_noise_covariance(model_);
     root_ = covariance_root(P);
-    Eigen::VectorXd explained(2 * B * q);  // per column of Xn: (2 / L) sigma^2 of its probe
+    Eigen::VectorXd root_explained(2 * B * q);  // per column of Xn: sqrt((2 / L) sigma^2) of its probe
     for (Eigen::Index k = 0; k < B; ++k)
         for (Eigen::Index j = 0; j < q; ++j)
-            explained.segment(2 * (k * q + j), 2).setConstant(2.0 / static_cast<double>(L) *
-                                                              model_.sensor_noise[j] * model_.sensor_noise[j]);
+            root_explained.segment(2 * (k * q + j), 2).setConstant(std::sqrt(2.0 / static_cast<double>(L)) * model_.sensor_noise[j]);
     Eigen::MatrixXd explained_by_lines = Eigen::MatrixXd::Zero(n, n);  // Xn diag(explained) Xn^T, one triangle
-    explained_by_lines.selfadjointView<Eigen::Lower>().rankUpdate(Xn_ * explained.cwiseSqrt().asDiagonal());
+    explained_by_lines.selfadjointView<Eigen::Lower>().rankUpdate(Xn_ * root_explained.asDiagonal());
     explained_by_lines = explained_by_lines.selfadjointView<Eigen::Lower>();
     Eigen::MatrixXd residual = P - ML_ * P * ML_.transpose() - W * explained_by_lines * W.transpose();
     residual_root_ = covariance_root(0.5 * (residual + residual.transpose()));
