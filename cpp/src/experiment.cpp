@@ -21,7 +21,7 @@ LineEstimate drawn_experiment(const Rig& rig, const Controller& controller, cons
                               std::uint64_t seed, int median_window) {
     PeriodEstimator estimator(plan);
     SteadyLines draw(Loop(rig, controller, seed).linear_model(), plan.period, estimator.bins());
-    draw.start(period_force, seed);
+    draw.start(period_force, seed, settle_periods + periods);
     std::vector<std::complex<double>> force(estimator.bins().size()), displacement(force.size());
     for (Eigen::Index p = 0; p < settle_periods + periods; ++p) {
         draw.next(force.data(), displacement.data());

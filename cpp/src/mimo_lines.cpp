@@ -1,6 +1,7 @@
 #include "amb_fast/mimo_lines.hpp"
 
 #include <Eigen/Eigenvalues>  // HessenbergDecomposition
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -173,16 +174,9 @@ SteadyLines::SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eig
     WL_ = (2.0 / static_cast<double>(L)) * W;
     clean_force_.resize(B, p);
     det_.resize(B * q);
-    z0_.resize(n);
-    zL_.resize(n);
-    draws_.resize(n);
-    d_.resize(n);
-    v_.resize(2 * B * q);
-    change_re_.resize(B * q);
-    change_im_.resize(B * q);
 }
 
-void SteadyLines::start(const double* period_force, std::uint64_t seed) {
+void SteadyLines::start(const double* period_force, std::uint64_t seed, Eigen::Index periods) {
     const Eigen::Index p = model_.forces(), q = model_.probes(), m = p + q;
     const auto B = static_cast<Eigen::Index>(bins_.size());
     // The forces' lines, the probes' periodic response to them, the recorded (transduced) force lines.
@@ -232,41 +226,66 @@ void SteadyLines::start(const double* period_force, std::uint64_t seed) {
     for (Eigen::Index j = 0; j < q; ++j) probe_.emplace_back(stream_seed(seed, 0, j));
     force_.clear();
     for (Eigen::Index c = 0; c < p; ++c) force_.emplace_back(stream_seed(seed, 2, c));
-    z0_.setZero();
-    add_stationary_noise(root_, seed, z0_);
+    Eigen::VectorXd z0 = Eigen::VectorXd::Zero(model_.states());
+    add_stationary_noise(root_, seed, z0);
+    Z_.resize(model_.states(), std::min(periods, block) + 1);
+    Z_.col(0) = z0;
+    left_ = periods;
+    drawn_ = next_ = 0;
+}
+
+// The next block's periods: their noise spectra (each stream in period order), the states at their ends
+// (z' = M^L z + W (2 / L) Re(Xn V) + the residual), and what each period's change of state leaks into
+// the lines.
+void SteadyLines::draw_block() {
+    poll_interrupt();
+    if (left_ <= 0) throw std::logic_error("SteadyLines::next: more periods than start() was told");
+    const Eigen::Index q = model_.probes(), n = model_.states();
+    const auto B = static_cast<Eigen::Index>(bins_.size());
+    // Up to `block` periods, fewer where their noise spectra would pass a megabyte (very many lines).
+    const Eigen::Index P = std::min({left_, block, std::max<Eigen::Index>(1, (Eigen::Index{1} << 17) / (2 * B * q))});
+    Z_.col(0) = Z_.col(drawn_);  // the last block's end
+    V_.resize(2 * B * q, P);
+    draws_.resize(n, P);
+    for (Eigen::Index period = 0; period < P; ++period) {
+        for (Eigen::Index j = 0; j < q; ++j) {  // V: (Re, Im) per line and probe
+            const double sigma = std::sqrt(0.5 * static_cast<double>(L_)) * model_.sensor_noise[j];
+            NormalStream& draw = probe_[static_cast<std::size_t>(j)];
+            for (Eigen::Index k = 0; k < B; ++k) {
+                double re = 0.0, im = 0.0;
+                if (sigma > 0.0) re = draw(), im = draw();
+                V_(2 * (k * q + j), period) = sigma * re;
+                V_(2 * (k * q + j) + 1, period) = sigma * im;
+            }
+        }
+        rest_->fill(draws_.col(period).data(), n, 1.0);
+    }
+    Eigen::MatrixXd w = WL_ * (Xn_ * V_);  // n x P
+    w.noalias() += residual_root_ * draws_;
+    for (Eigen::Index period = 0; period < P; ++period) Z_.col(period + 1).noalias() = ML_ * Z_.col(period) + w.col(period);
+    const Eigen::MatrixXd d = T_inverse_ * (Z_.middleCols(1, P) - Z_.leftCols(P));
+    change_re_.noalias() = CRz_re_ * d;
+    change_im_.noalias() = CRz_im_ * d;
+    left_ -= P;
+    drawn_ = P;
+    next_ = 0;
 }
 
 void SteadyLines::next(cd* force_lines, cd* displacement_lines) {
-    poll_interrupt();
+    if (next_ == drawn_) draw_block();
+    const Eigen::Index period = next_++;
     const Eigen::Index p = model_.forces(), q = model_.probes(), m = p + q;
     const auto B = static_cast<Eigen::Index>(bins_.size());
-    for (Eigen::Index j = 0; j < q; ++j) {  // V: (Re, Im) per line and probe
-        const double sigma = std::sqrt(0.5 * static_cast<double>(L_)) * model_.sensor_noise[j];
-        NormalStream& draw = probe_[static_cast<std::size_t>(j)];
-        for (Eigen::Index k = 0; k < B; ++k) {
-            double re = 0.0, im = 0.0;
-            if (sigma > 0.0) re = draw(), im = draw();
-            v_[2 * (k * q + j)] = sigma * re;
-            v_[2 * (k * q + j) + 1] = sigma * im;
-        }
-    }
-    rest_->fill(draws_.data(), draws_.size(), 1.0);
-    zL_.noalias() = ML_ * z0_;
-    zL_.noalias() += WL_ * (Xn_ * v_);
-    zL_.noalias() += residual_root_ * draws_;
-    d_.noalias() = T_inverse_ * (zL_ - z0_);
-    change_re_.noalias() = CRz_re_ * d_;
-    change_im_.noalias() = CRz_im_ * d_;
+    const auto v = V_.col(period);
+    double zero_if_finite = 0.0;  // 0 y is 0 for a finite y, NaN for an infinite or NaN one
     for (Eigen::Index k = 0; k < B; ++k)
         for (Eigen::Index i = 0; i < q; ++i) {
-            cd y = det_[k * q + i] - cd(change_re_[k * q + i], change_im_[k * q + i]);
-            for (Eigen::Index j = 0; j < q; ++j)
-                y += G_(i, k * m + p + j) * cd(v_[2 * (k * q + j)], v_[2 * (k * q + j) + 1]);
-            if (!std::isfinite(y.real()) || !std::isfinite(y.imag()))
-                throw std::overflow_error("the line spectra became non-finite: the loop is unstable");
+            cd y = det_[k * q + i] - cd(change_re_(k * q + i, period), change_im_(k * q + i, period));
+            for (Eigen::Index j = 0; j < q; ++j) y += G_(i, k * m + p + j) * cd(v[2 * (k * q + j)], v[2 * (k * q + j) + 1]);
+            zero_if_finite += 0.0 * y.real() + 0.0 * y.imag();
             displacement_lines[k * q + i] = y;
         }
-    z0_.swap(zL_);
+    if (zero_if_finite != 0.0) throw std::overflow_error("the line spectra became non-finite: the loop is unstable");
     // The force transducers' white noise: N(0, L sigma^2 / 2) in the real and in the imaginary part of
     // every line, one stream per channel, line by line.
     for (Eigen::Index c = 0; c < p; ++c) {
@@ -295,7 +314,7 @@ void steady_lines(const MimoModel& model, const double* const* period_force, Eig
     SteadyLines draw(model, L, bins);
     std::vector<cd> f(static_cast<std::size_t>(B * p)), y(static_cast<std::size_t>(B * q));
     for (Eigen::Index l = 0; l < K; ++l) {
-        draw.start(period_force[l], seeds[static_cast<std::size_t>(l)]);
+        draw.start(period_force[l], seeds[static_cast<std::size_t>(l)], periods);
         for (Eigen::Index period = 0; period < periods; ++period) {
             draw.next(f.data(), y.data());
             for (Eigen::Index i = 0; i < B * p; ++i) force_lines[(period * B * p + i) * K + l] = f[static_cast<std::size_t>(i)];

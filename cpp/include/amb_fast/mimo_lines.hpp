@@ -40,22 +40,28 @@ void mimo_line_experiments(const MimoModel& model, const double* const* period_f
 
 // The drawn line spectra of one experiment at a time, period by period (memory O(lines), however
 // many periods): the per-line solves once per model, then start() per experiment and next() per period.
-// The numbers depend only on the model, the period force, the seed and the period's index.
+// The periods are drawn in blocks of up to `block` (their noise's products as matrix products, not one
+// matrix-vector product per period), next() hands them out one by one. The numbers depend only on the
+// model, the period force, the seed and the period's index (a block draws each stream in the order
+// single periods would).
 class SteadyLines {
 public:
     // bins strictly between 0 and L/2.
     SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eigen::Index> bins);
-    // A new experiment: period_force (L x p, sample-major, finite: the callers check it) repeated forever,
-    // noise from seed; the state starts in its periodic steady state, the noise-driven part drawn from
-    // its stationary distribution.
-    void start(const double* period_force, std::uint64_t seed);
+    // A new experiment of `periods` periods: period_force (L x p, sample-major, finite: the callers check
+    // it) repeated, noise from seed; the state starts in its periodic steady state, the noise-driven part
+    // drawn from its stationary distribution.
+    void start(const double* period_force, std::uint64_t seed, Eigen::Index periods);
     // The next period's line spectra: force_lines[line * p + channel] (the recorded, transduced force with
-    // the transducer's noise), displacement_lines[line * q + probe]. Throws std::overflow_error when they
-    // are not finite (an unstable loop).
+    // the transducer's noise), displacement_lines[line * q + probe]. At most `periods` calls after start.
+    // Throws std::overflow_error when they are not finite (an unstable loop).
     void next(std::complex<double>* force_lines, std::complex<double>* displacement_lines);
+    static constexpr Eigen::Index block = 16;
     const std::vector<Eigen::Index>& bins() const { return bins_; }
 
 private:
+    void draw_block();
+
     MimoModel model_;
     Eigen::Index L_;
     std::vector<Eigen::Index> bins_;
@@ -67,7 +73,11 @@ private:
     Eigen::VectorXcd det_;                      // the probes' periodic response to the forces
     std::optional<NormalStream> rest_;          // the state's line-free part
     std::vector<NormalStream> probe_, force_;   // per probe, per force channel
-    Eigen::VectorXd z0_, zL_, draws_, d_, v_, change_re_, change_im_;
+    // The current block, a column per period: the probes' noise spectra V as (Re, Im) pairs per line and
+    // probe, the state at the periods' ends (Z: the block's start first), the leak of the state's change
+    // into the lines (real, imaginary parts).
+    Eigen::MatrixXd V_, Z_, draws_, change_re_, change_im_;
+    Eigen::Index left_ = 0, drawn_ = 0, next_ = 0;  // periods not yet drawn; in the block; handed out
 };
 
 // The 2x2 estimate H = F Y^-1 per line from both experiments' per-period line spectra, laid out as
