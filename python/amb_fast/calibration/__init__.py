@@ -6,6 +6,12 @@ fit that accounts for standard errors estimated from few periods, and prediction
 controllers never tried on the rig. :func:`design_controller` chooses controller parameters so that the
 *actual* stiffness and damping (lags included) meet targets, with a stability and sensitivity limit.
 ``docs/calibration.md`` is the user's guide.
+
+Modules: ``_fit`` (:func:`fit_rig`: the least squares, covariance and goodness of fit), ``_problem`` (what
+is fitted: the fittable rig fields and their scales, start values and bounds, the estimates as weighted
+data, the loop model evaluated for a rig), ``_result`` (:class:`RigFit`: propagated predictions and the
+report), ``_design`` (:func:`design_controller` and :class:`Design`), ``_cli`` (the ``fit`` and
+``design`` commands).
 """
 
 from __future__ import annotations

@@ -18,7 +18,8 @@ from .._experiment import Estimate, UnexcitedLines
 from .._params import PID, Rig
 from ..io import load_estimate
 from ._design import design_controller
-from ._fit import FITTABLE, fit_rig
+from ._fit import fit_rig
+from ._problem import FITTABLE
 
 _COLUMNS = ("freq_Hz", "H_real_N_per_m", "H_imag_N_per_m", "k_std_N_per_m", "c_std_Ns_per_m")
 _RIG_FIELDS = {f.name for f in fields(Rig)} - {"force_law"}

@@ -1,9 +1,11 @@
 """Files in and out.
 
-- Readers for what rigs write (``_recording``): CSV/TSV/``;`` dialects with quoted headers, a units row
-  and decimal commas; MATLAB v4-v7 (scipy) and v7.3 (HDF5, h5py), dSPACE ControlDesk/TRACE exports with
-  several recordings; NI TDMS (npTDMS). Channels by name or index, units scaled to SI or refused; text
-  read in chunks keeping only the chosen columns.
+- Readers for what rigs write: the :class:`Recording` and its entry points ``load_recording`` and
+  ``save_recording`` (``_recording``); one reader per format: CSV/TSV/``;`` dialects with quoted headers,
+  a units row and decimal commas, read in chunks keeping only the chosen columns (``_text``); MATLAB
+  v4-v7 (scipy) and v7.3 (HDF5, h5py), dSPACE ControlDesk/TRACE exports with several recordings
+  (``_mat``); NI TDMS (npTDMS, ``_tdms``). What they share (``_channels``): channels by name or index,
+  units scaled to SI or refused, fs from a time column, the choice among a file's recordings.
 - Writers (``_results``): estimates as CSV with a metadata header or NetCDF, xarray and pandas views,
   SHA-256 checksums (and HDF5 fletcher32) checked on load.
 - The atomic-write helper (``_atomic``): a temporary file in the same directory, fsync, ``os.replace``.
@@ -12,8 +14,10 @@
 from __future__ import annotations
 
 from ._atomic import atomic_path, atomic_text, atomic_write
-from ._recording import Recording, load_recording, save_recording, sniff, split_unit
+from ._channels import split_unit
+from ._recording import Recording, load_recording, save_recording
 from ._results import load_estimate, read_netcdf, save_estimate, write_netcdf
+from ._text import sniff
 
 __all__ = [
     "Recording",

@@ -1,0 +1,145 @@
+"""The closed-loop poles as every run and sweep computes them: the core's eigenvalues of the closed-loop
+matrix (for a PID, affine in its gains, so many gain sets cost one stack), the stability check of a run,
+and the settling time the poles set.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import replace
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from . import _core
+from ._dispatch import two_axis_aware
+from ._errors import UnstableLoopError
+from ._linear_loop import AnyController, closed_loop
+from ._params import PID, Rig
+from ._validate import require, rig_and_controller
+
+
+@two_axis_aware
+def closed_loop_poles(rig: Rig, controller: AnyController) -> np.ndarray:
+    """Poles of the linearised sampled-data loop in the z-plane (stable: all ``|z| < 1``).
+
+    The equivalent continuous-time poles are ``log(z) * fs`` (rad/s).
+    """
+    rig_and_controller(rig, controller, "closed_loop_poles")
+    return np.linalg.eigvals(closed_loop(rig, controller)[0])
+
+
+def loop_poles(rig: Rig, controller: AnyController) -> np.ndarray:
+    """The closed-loop poles as every run and sweep computes them (so they choose the same settling and
+    flag the same points unstable): the core's eigenvalues (:func:`_eigenvalues`) of, for a PID, the
+    affine stack of :func:`spectral_radius`, else :func:`closed_loop`'s matrix."""
+    if isinstance(controller, PID):
+        ((_, stack),) = _closed_loop_stacks(rig, controller, _gain_arrays(controller, None, None, None))
+        return _eigenvalues(stack)[0]
+    return _eigenvalues(closed_loop(rig, controller)[0][None])[0]
+
+
+def _eigenvalues(stack: np.ndarray, workers: int = 1) -> np.ndarray:
+    """Eigenvalues of a stack of square matrices (count, m, m), in the core on up to ``workers`` threads
+    (one per 128 matrices: starting a thread costs about fifty 7x7 solves): one function for single runs
+    and sweeps, so both see the same digits."""
+    return _core.eigenvalues(np.ascontiguousarray(stack, dtype=float), max(1, min(workers, len(stack) // 128)))
+
+
+@functools.lru_cache(maxsize=256)
+def require_stable(rig: Rig, controller: AnyController) -> np.ndarray:
+    """The closed-loop poles (as :func:`loop_poles` computes them, read-only), or
+    :class:`UnstableLoopError` naming the unstable ones and the controller."""
+    poles = loop_poles(rig, controller)
+    poles.flags.writeable = False
+    bad = poles[np.abs(poles) >= 1.0]
+    if bad.size:
+        shown = ", ".join(f"{p:.6g} (|z|={abs(p):.6g})" for p in bad[:4])
+        if isinstance(controller, PID):
+            what = (f"kp={controller.kp} A/m, ki={controller.ki} A/(m s), kd={controller.kd} A s/m, "
+                    f"delay={controller.delay}")  # fmt: skip
+        else:
+            what = repr(controller)
+        raise UnstableLoopError(
+            f"the closed loop is unstable with {what}: pole(s) on or outside the unit circle: {shown}", bad
+        )
+    return poles
+
+
+def _gain_arrays(pid: PID, kp: ArrayLike | None, ki: ArrayLike | None, kd: ArrayLike | None) -> np.ndarray:
+    """Gain sets as an (N, 3) array: given arrays broadcast together, the rest from ``pid``."""
+    given = {"kp": kp, "ki": ki, "kd": kd}
+    arrays = [np.asarray(pid.__dict__[n] if v is None else v, dtype=float) for n, v in given.items()]
+    for name, array in zip(given, arrays):
+        require(bool(np.all(np.isfinite(array))), name, array, "finite")
+    return np.stack(np.broadcast_arrays(*arrays), axis=-1).reshape(-1, 3)
+
+
+@functools.lru_cache(maxsize=64)
+def _affine_closed_loop(
+    rig: Rig, pid: PID, with_integral: bool, with_derivative: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """The closed-loop matrix is affine in (kp, ki, kd) for a given set of controller states:
+    ``A = base + kp S0 + (ki - ki0) S1 + (kd - kd0) S2`` with ki0, kd0 = 1 where the state exists.
+    ``pid``'s own gains do not matter here (callers pass them as zero, for the cache)."""
+    ki0, kd0 = float(with_integral), float(with_derivative)
+
+    def at(p: float, i: float, d: float) -> np.ndarray:
+        return closed_loop(rig, replace(pid, kp=p, ki=i, kd=d))[0]
+
+    base = at(0.0, ki0, kd0)
+    slopes = [at(1.0, ki0, kd0) - base]
+    slopes.append(at(0.0, 2.0, kd0) - base if with_integral else np.zeros_like(base))
+    slopes.append(at(0.0, ki0, 2.0) - base if with_derivative else np.zeros_like(base))
+    return base, np.array(slopes)
+
+
+def _closed_loop_stacks(rig: Rig, pid: PID, gains: np.ndarray):  # noqa: ANN202
+    """(rows, stack of closed-loop matrices) per pattern of controller states among the gain sets."""
+    structure = replace(pid, kp=0.0, ki=0.0, kd=0.0)
+    pattern = (gains[:, 1] != 0) * 1 + (gains[:, 2] != 0) * 2
+    for code in np.unique(pattern):
+        rows = np.flatnonzero(pattern == code)
+        base, slopes = _affine_closed_loop(rig, structure, bool(code & 1), bool(code >> 1))
+        offsets = gains[rows] - np.array([0.0, float(code & 1), float(code >> 1)])
+        yield rows, base + np.einsum("nk,kij->nij", offsets, slopes)
+
+
+def spectral_radius(
+    rig: Rig,
+    pid: PID,
+    *,
+    kp: ArrayLike | None = None,
+    ki: ArrayLike | None = None,
+    kd: ArrayLike | None = None,
+    workers: int = 1,
+) -> np.ndarray:
+    """Largest |z| of the closed-loop poles for many gain sets at once (the rest of ``pid`` fixed).
+
+    The closed-loop matrix is affine in the gains, so each gain set's matrix is a combination of four
+    cached ones, and the eigenvalues of the whole stack come in one call (on ``workers`` threads).
+    Returns one radius per gain set (stable: < 1), in the broadcast shape of the gains, flattened. A
+    single run and a sweep use this same computation, so they choose the same settling time.
+    """
+    gains = _gain_arrays(pid, kp, ki, kd)
+    radius = np.empty(len(gains))
+    for rows, stack in _closed_loop_stacks(rig, pid, gains):
+        radius[rows] = np.max(np.abs(_eigenvalues(stack, workers)), axis=-1)
+    return radius
+
+
+def settling_radius(rig: Rig, pid: AnyController, radius: ArrayLike) -> np.ndarray:
+    """The slowest decay per sample of a run: the loop's spectral ``radius``, or the force transducer's
+    AC-coupling pole ``exp(-1/(fs tau))`` when that is slower (it settles on the applied force)."""
+    if rig.force_coupling_tau is None:
+        return np.asarray(radius, dtype=float)
+    return np.maximum(radius, np.exp(-1.0 / (pid.fs * rig.force_coupling_tau)))
+
+
+def settle_periods_for(radius: np.ndarray, period_samples: int, decay: float = 1e-9) -> np.ndarray:
+    """Periods of ``period_samples`` for poles of the given spectral ``radius`` (< 1) to decay below
+    ``decay``: ``ceil(ln(decay) / ln(radius) / period_samples) + 1``."""
+    radius = np.asarray(radius, dtype=float)
+    with np.errstate(divide="ignore"):
+        samples = np.where(radius > 0, np.log(decay) / np.log(np.where(radius > 0, radius, 0.5)), 0.0)
+    return np.ceil(samples / period_samples).astype(np.int64) + 1
