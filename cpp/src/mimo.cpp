@@ -16,7 +16,9 @@
 namespace amb_fast {
 
 std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t kind, Eigen::Index j) {
-    std::uint64_t x = seed + 0x9e3779b97f4a7c15ULL * (2 * static_cast<std::uint64_t>(j) + kind + 1);
+    // 8 j + kind + 1 is one number per (kind, j) for kind < 8 (the 2 j + kind + 1 of earlier releases gave
+    // the force lines' channel 0 the stream of probe 1).
+    std::uint64_t x = seed + 0x9e3779b97f4a7c15ULL * (8 * static_cast<std::uint64_t>(j) + kind + 1);
     x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
     x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
     return x ^ (x >> 31);

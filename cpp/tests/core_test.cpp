@@ -454,6 +454,14 @@ int main() {
         }
     }
 
+    {  // Every noise source of a run has its own stream: no two (kind, j) give one seed.
+        std::vector<std::uint64_t> seen;
+        for (std::uint64_t kind = 0; kind < 8; ++kind)
+            for (Eigen::Index j = 0; j < 64; ++j) seen.push_back(stream_seed(12345, kind, j));
+        std::sort(seen.begin(), seen.end());
+        check(std::adjacent_find(seen.begin(), seen.end()) == seen.end(), "stream_seed: one stream per (kind, source)");
+    }
+
     {  // Hessenberg LU of zI - H, both solves, against Eigen's dense LU (pivoting exercised: z near H's values).
         const Eigen::Index n = 9;
         Eigen::MatrixXd M(n, n);

@@ -84,7 +84,8 @@ private:
 };
 
 // Seed of noise source j of a kind (0: probe, 1: force transducer, 2: transducer lines, 3: the state's
-// line-free part): splitmix64 of the run's seed, the kind and j, so every source has its own stream.
+// line-free part; kind < 8): splitmix64 of the run's seed, the kind and j, so every source has its own
+// stream.
 std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t kind, Eigen::Index j);
 
 // The state's stationary distribution under the probes' noise: its covariance (steady.hpp), and
