@@ -78,13 +78,19 @@ void lines_from_rest(const MimoModel& model, const double* const* period_force, 
 // Per line, with z = e^{jw} and M = T H T^-1 (H upper Hessenberg): what the forces and the probe noise
 // give at the probes (G), what the noise's spectrum gives the state at the period's end (through Xn),
 // and what a state change over the period gives at the probes (CRz).
-SteadyLines::SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eigen::Index> bins)
+SteadyLines::SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eigen::Index> bins, NoiseSources sources)
     : model_(validated(model)),
+      sources_(std::move(sources)),
       L_(L),
       bins_(std::move(bins)),
       transform_(L, bins_, LineTransform::Method::automatic) {
     const Eigen::Index n = model_.states(), p = model_.forces(), q = model_.probes(), m = p + q;
     const auto B = static_cast<Eigen::Index>(bins_.size());
+    for (auto [ids, count] : {std::pair{&sources_.probes, q}, std::pair{&sources_.forces, p}}) {
+        if (ids->empty())
+            for (Eigen::Index j = 0; j < count; ++j) ids->push_back(j);
+        require(static_cast<Eigen::Index>(ids->size()) == count, "noise sources", ids->size(), "one per channel");
+    }
     for (const Eigen::Index bin : bins_)
         require(bin > 0 && 2 * bin < L, "bin", bin, "strictly between 0 and half the period (steady start)");
     // M = T H T^-1 with T = D Q: D balances, Q is the orthogonal Hessenberg reduction of D^-1 M D.
@@ -221,13 +227,13 @@ void SteadyLines::start(const double* period_force, std::uint64_t seed, Eigen::I
     }
     for (Eigen::Index k = 0; k < B; ++k) det_.segment(k * q, q) = G_.middleCols(k * m, p).lazyProduct(F.row(k).transpose());
     // The noise: the state starts in its stationary distribution, then goes on period by period.
-    rest_.emplace(stream_seed(seed, 3, 0));
+    rest_.emplace(stream_seed(seed, 3, sources_.part));
     probe_.clear();
-    for (Eigen::Index j = 0; j < q; ++j) probe_.emplace_back(stream_seed(seed, 0, j));
+    for (Eigen::Index j = 0; j < q; ++j) probe_.emplace_back(stream_seed(seed, 0, sources_.probes[static_cast<std::size_t>(j)]));
     force_.clear();
-    for (Eigen::Index c = 0; c < p; ++c) force_.emplace_back(stream_seed(seed, 2, c));
+    for (Eigen::Index c = 0; c < p; ++c) force_.emplace_back(stream_seed(seed, 2, sources_.forces[static_cast<std::size_t>(c)]));
     Eigen::VectorXd z0 = Eigen::VectorXd::Zero(model_.states());
-    add_stationary_noise(root_, seed, z0);
+    add_stationary_noise(root_, sources_.part == 0 ? seed : stream_seed(seed, 4, sources_.part), z0);
     Z_.resize(model_.states(), std::min(periods, block) + 1);
     Z_.col(0) = z0;
     left_ = periods;
@@ -304,22 +310,45 @@ void SteadyLines::next(cd* force_lines, cd* displacement_lines) {
 
 namespace {
 // From the periodic steady state, the line spectra drawn period by period (SteadyLines), experiment by
-// experiment, into the experiments' interleaved layout.
+// experiment, into the experiments' interleaved layout. A model of independent parts (an uncoupled
+// two-axis rig) is drawn part by part: each part's solves and products are those of its own size.
 void steady_lines(const MimoModel& model, const double* const* period_force, Eigen::Index L, Eigen::Index periods,
                   const std::vector<std::uint64_t>& seeds, const std::vector<Eigen::Index>& bins, cd* force_lines,
                   cd* displacement_lines) {
     const auto K = static_cast<Eigen::Index>(seeds.size());
     const Eigen::Index p = model.forces(), q = model.probes();
     const auto B = static_cast<Eigen::Index>(bins.size());
-    SteadyLines draw(model, L, bins);
-    std::vector<cd> f(static_cast<std::size_t>(B * p)), y(static_cast<std::size_t>(B * q));
-    for (Eigen::Index l = 0; l < K; ++l) {
-        draw.start(period_force[l], seeds[static_cast<std::size_t>(l)], periods);
-        for (Eigen::Index period = 0; period < periods; ++period) {
-            draw.next(f.data(), y.data());
-            for (Eigen::Index i = 0; i < B * p; ++i) force_lines[(period * B * p + i) * K + l] = f[static_cast<std::size_t>(i)];
-            for (Eigen::Index i = 0; i < B * q; ++i)
-                displacement_lines[(period * B * q + i) * K + l] = y[static_cast<std::size_t>(i)];
+    std::vector<MimoPart> parts = independent_parts(model);
+    const bool whole = parts.size() == 1 || std::any_of(parts.begin(), parts.end(), [](const MimoPart& part) {
+                           return part.forces.empty() || part.probes.empty();
+                       });
+    if (whole) parts = {MimoPart{{}, {}, {}}};
+    for (std::size_t t = 0; t < parts.size(); ++t) {
+        const MimoPart& part = parts[t];
+        std::vector<Eigen::Index> forces = part.forces, probes = part.probes;
+        if (whole) {
+            for (Eigen::Index c = 0; c < p; ++c) forces.push_back(c);
+            for (Eigen::Index j = 0; j < q; ++j) probes.push_back(j);
+        }
+        const auto pp = static_cast<Eigen::Index>(forces.size()), qq = static_cast<Eigen::Index>(probes.size());
+        SteadyLines draw(whole ? model : part.model(model), L, bins, {probes, forces, static_cast<Eigen::Index>(t)});
+        std::vector<double> force(static_cast<std::size_t>(L * pp));
+        std::vector<cd> f(static_cast<std::size_t>(B * pp)), y(static_cast<std::size_t>(B * qq));
+        for (Eigen::Index l = 0; l < K; ++l) {
+            for (Eigen::Index k = 0; k < L; ++k)
+                for (Eigen::Index c = 0; c < pp; ++c)
+                    force[static_cast<std::size_t>(k * pp + c)] = period_force[l][k * p + forces[static_cast<std::size_t>(c)]];
+            draw.start(force.data(), seeds[static_cast<std::size_t>(l)], periods);
+            for (Eigen::Index period = 0; period < periods; ++period) {
+                draw.next(f.data(), y.data());
+                for (Eigen::Index k = 0; k < B; ++k) {
+                    for (Eigen::Index c = 0; c < pp; ++c)
+                        force_lines[((period * B + k) * p + forces[static_cast<std::size_t>(c)]) * K + l] = f[static_cast<std::size_t>(k * pp + c)];
+                    for (Eigen::Index j = 0; j < qq; ++j)
+                        displacement_lines[((period * B + k) * q + probes[static_cast<std::size_t>(j)]) * K + l] =
+                            y[static_cast<std::size_t>(k * qq + j)];
+                }
+            }
         }
     }
 }

@@ -454,6 +454,37 @@ int main() {
         }
     }
 
+    {  // A model of two independent parts, their states interleaved: found, and each part's model picked.
+        MimoModel model;
+        const Eigen::Index n = 5;
+        model.M = Eigen::MatrixXd::Zero(n, n);
+        for (const auto& [i, j] : {std::pair{0, 2}, std::pair{2, 4}, std::pair{4, 0}, std::pair{1, 3}, std::pair{3, 3}})
+            model.M(i, j) = 0.1 * (i + 1) + 0.01 * j;
+        model.Bf = Eigen::MatrixXd::Zero(n, 2);
+        model.Bf(3, 0) = 1.0, model.Bf(2, 1) = 2.0;  // channel 0 drives part {1, 3}, channel 1 part {0, 2, 4}
+        model.Bn = Eigen::MatrixXd::Zero(n, 2);
+        model.Bn(0, 0) = 3.0, model.Bn(1, 1) = 4.0;
+        model.C = Eigen::MatrixXd::Zero(3, n);  // a third row (not a probe) touching both parts is not a link
+        model.C(0, 4) = 5.0, model.C(1, 3) = 6.0, model.C.row(2).setOnes();
+        model.Dn = Eigen::MatrixXd::Identity(3, 2);
+        model.transducer_pole = Eigen::Vector2d(0.1, 0.2);
+        model.sensor_noise = Eigen::Vector2d(1e-6, 2e-6);
+        model.force_noise = Eigen::Vector2d(0.3, 0.4);
+        const std::vector<MimoPart> parts = independent_parts(model);
+        using V = std::vector<Eigen::Index>;
+        check(parts.size() == 2 && parts[0].states == V{0, 2, 4} && parts[0].forces == V{1} && parts[0].probes == V{0} &&
+                  parts[1].states == V{1, 3} && parts[1].forces == V{0} && parts[1].probes == V{1},
+              "independent_parts: two parts, their states, forces and probes");
+        const MimoModel second = parts.size() == 2 ? parts[1].model(model) : model;
+        check(second.M.rows() == 2 && second.M(0, 1) == model.M(1, 3) && second.M(1, 1) == model.M(3, 3) &&
+                  second.M(1, 0) == 0.0 && second.Bf(1, 0) == 1.0 && second.Bn(0, 0) == 4.0 && second.C.rows() == 1 &&
+                  second.C(0, 1) == 6.0 && second.Dn(0, 0) == 1.0 && second.transducer_pole[0] == 0.1 &&
+                  second.sensor_noise[0] == 2e-6 && second.force_noise[0] == 0.3,
+              "MimoPart::model picks the part's entries");
+        model.M(0, 1) = 1e-9;  // any coupling joins them
+        check(independent_parts(model).size() == 1, "independent_parts: a coupled model is one part");
+    }
+
     {  // Every noise source of a run has its own stream: no two (kind, j) give one seed.
         std::vector<std::uint64_t> seen;
         for (std::uint64_t kind = 0; kind < 8; ++kind)

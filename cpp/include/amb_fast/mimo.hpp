@@ -83,6 +83,17 @@ private:
     Eigen::Index k_ = 0;
 };
 
+// A part of a model that no other part reaches: its states, and the force channels and probes that touch
+// them (indices into the whole model's). Its model keeps only the probes' rows of C (the lines' outputs).
+struct MimoPart {
+    std::vector<Eigen::Index> states, forces, probes;
+    MimoModel model(const MimoModel& whole) const;
+};
+// The model's independent parts: states linked through M, force channels and probes through the states
+// they touch (Bf, Bn, the probes' rows of C), probes through Dn; in order of their first node. One part
+// when everything is linked. An uncoupled two-axis rig has two, one per axis.
+std::vector<MimoPart> independent_parts(const MimoModel& model);
+
 // Seed of noise source j of a kind (0: probe, 1: force transducer, 2: transducer lines, 3: the state's
 // line-free part; kind < 8): splitmix64 of the run's seed, the kind and j, so every source has its own
 // stream.

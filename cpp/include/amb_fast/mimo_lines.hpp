@@ -44,10 +44,18 @@ void mimo_line_experiments(const MimoModel& model, const double* const* period_f
 // matrix-vector product per period), next() hands them out one by one. The numbers depend only on the
 // model, the period force, the seed and the period's index (a block draws each stream in the order
 // single periods would).
+// Which of the run's noise sources (stream_seed's j) a drawn model's probes and force channels draw from,
+// and which part of a larger model it is (independent_parts): by default probe j and channel c
+// themselves, part 0.
+struct NoiseSources {
+    std::vector<Eigen::Index> probes, forces;
+    Eigen::Index part = 0;
+};
+
 class SteadyLines {
 public:
     // bins strictly between 0 and L/2.
-    SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eigen::Index> bins);
+    SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eigen::Index> bins, NoiseSources sources = {});
     // A new experiment of `periods` periods: period_force (L x p, sample-major, finite: the callers check
     // it) repeated, noise from seed; the state starts in its periodic steady state, the noise-driven part
     // drawn from its stationary distribution.
@@ -63,6 +71,7 @@ private:
     void draw_block();
 
     MimoModel model_;
+    NoiseSources sources_;
     Eigen::Index L_;
     std::vector<Eigen::Index> bins_;
     LineTransform transform_;                   // the excitation's lines
