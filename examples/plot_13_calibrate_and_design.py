@@ -17,6 +17,7 @@ from dataclasses import replace
 
 import matplotlib.pyplot as plt
 import numpy as np
+from scipy import stats
 
 import amb_fast as af
 from amb_fast.calibration import design_controller, fit_rig
@@ -58,7 +59,8 @@ freq = measured[0].freq
 k_pred, c_pred, k_std, c_std = fit.coefficients(untried, freq)
 check = af.run_experiment(hidden, untried, sphs, periods=20, seed=3)
 combined = np.hypot(check.k_std, k_std)
-print(f"untried gains: {np.mean(np.abs(check.k - k_pred) <= 1.96 * combined):.1%} of lines within the 95 % band (k)")
+t = stats.t.ppf(0.975, check.blocks - 1)  # k_std has blocks - 1 degrees of freedom: Student's t, not 1.96
+print(f"untried gains: {np.mean(np.abs(check.k - k_pred) <= t * combined):.1%} of lines within the 95 % band (k)")
 
 # %%
 # Design for the actual stiffness and damping

@@ -13,6 +13,7 @@ simulated experiment checks them. The effective coefficients (paper eq. 5) are t
 
 import matplotlib.pyplot as plt
 import numpy as np
+from scipy import stats
 
 import amb_fast as af
 
@@ -51,8 +52,9 @@ print(f"every notch raises the sensitivity peak: {raised}")
 # A simulated experiment with the notch at 400 Hz agrees with the prediction (its noise aside):
 check = af.run_experiment(rig, pid * af.notch(400.0), af.schroeder_multisine(), seed=1)
 k400, c400 = actual(pid * af.notch(400.0))
-inside = np.abs(check.k - k400) <= 1.96 * check.k_std
-print(f"notch at 400 Hz: {inside.mean():.0%} of the lines within 1.96 standard errors of the prediction (k)")
+t = stats.t.ppf(0.975, check.blocks - 1)  # k_std has blocks - 1 degrees of freedom: Student's t, not 1.96
+inside = np.abs(check.k - k400) <= t * check.k_std
+print(f"notch at 400 Hz: {inside.mean():.0%} of the lines within the 95 % Student-t band of the prediction (k)")
 
 # %%
 # The figure: actual (solid) and effective (dashed) stiffness and damping for a few notches.
