@@ -49,4 +49,32 @@ void bind_params(py::module_& m) {
         .def_readonly("D", &Controller::D)
         .def_readonly("fs", &Controller::fs)
         .def_readonly("delay", &Controller::delay);
+
+    // A sweep's PIDs without a Python object per point: only the assembly, the terms come computed.
+    m.def(
+        "pid_controllers",
+        [](const Eigen::VectorXd& integral_in, const Eigen::VectorXd& derivative_out, const Eigen::VectorXd& direct,
+           const Eigen::VectorXd& ki, const Eigen::VectorXd& kd, double pole, double fs, int delay) {
+            const Eigen::Index count = direct.size();
+            for (const auto* v : {&integral_in, &derivative_out, &ki, &kd})
+                if (v->size() != count) throw std::invalid_argument("pid_controllers: one entry per point in every array");
+            std::vector<Controller> out;
+            out.reserve(static_cast<std::size_t>(count));
+            for (Eigen::Index j = 0; j < count; ++j) {
+                const bool integral = ki[j] != 0.0, derivative = kd[j] != 0.0;
+                const int n = int(integral) + int(derivative);
+                Controller c{Eigen::MatrixXd::Zero(n, n), Eigen::VectorXd(n), Eigen::VectorXd(n), direct[j], fs, delay};
+                int state = 0;
+                if (integral) c.A(state, state) = 1.0, c.B[state] = integral_in[j], c.C[state] = 1.0, ++state;
+                if (derivative) c.A(state, state) = pole, c.B[state] = 1.0, c.C[state] = derivative_out[j];
+                c.validate();
+                out.push_back(std::move(c));
+            }
+            return out;
+        },
+        py::arg("integral_in"), py::arg("derivative_out"), py::arg("direct"), py::arg("ki"), py::arg("kd"), py::arg("pole"),
+        py::arg("fs"), py::arg("delay"),
+        "A digital PID's controllers in modal form (amb_fast.PID.state_space), one per entry of the arrays of its "
+        "terms: the integral's state (pole 1, input integral_in) where ki != 0, then the derivative's (pole `pole`, "
+        "output derivative_out) where kd != 0, direct term `direct`.");
 }

@@ -58,6 +58,11 @@ class Controller:
     @property
     def delay(self) -> int: ...
 
+def pid_controllers(
+    integral_in: ArrayLike, derivative_out: ArrayLike, direct: ArrayLike, *, ki: ArrayLike, kd: ArrayLike,
+    pole: float, fs: float, delay: int,
+) -> list[Controller]: ...
+
 class LinePlan:
     def __init__(self, *, period: int, excited: ArrayLike, unexcited: ArrayLike) -> None: ...
 

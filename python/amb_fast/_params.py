@@ -254,17 +254,9 @@ class PID:
         """The core's controllers of this PID with each row of ``gains`` (kp, ki, kd): the numbers of
         ``replace(self, kp=..., ki=..., kd=...)._to_core()``, without making the PIDs (sweeps)."""
         kp, ki, kd = (np.ascontiguousarray(gains[:, j], dtype=float) for j in range(3))
-        integral_in, derivative_out, D = self._terms(kp, ki, kd)
-        a = self._derivative_pole()
-        A = {}  # the poles depend only on which states there are
-        out = []
-        for j, shape in enumerate(zip((ki != 0).tolist(), (kd != 0).tolist())):
-            poles, B, C = _modal(*shape, integral_in[j], derivative_out[j], a)
-            if shape not in A:
-                A[shape] = np.diag(poles).reshape(len(poles), len(poles))
-            out.append(_core.Controller(A=A[shape], B=np.array(B), C=np.array(C), D=float(D[j]), fs=self.fs,
-                                        delay=self.delay))  # fmt: skip
-        return out
+        terms = [np.broadcast_to(x, kp.shape) for x in self._terms(kp, ki, kd)]
+        # the core assembles what _modal lays out, entry by entry
+        return _core.pid_controllers(*terms, ki=ki, kd=kd, pole=self._derivative_pole(), fs=self.fs, delay=self.delay)
 
     def _to_core(self) -> _core.Controller:
         return _core_pid(self)
