@@ -59,8 +59,15 @@ class Controller:
     def delay(self) -> int: ...
 
 def pid_controllers(
-    integral_in: ArrayLike, derivative_out: ArrayLike, direct: ArrayLike, *, ki: ArrayLike, kd: ArrayLike,
-    pole: float, fs: float, delay: int,
+    integral_in: ArrayLike,
+    derivative_out: ArrayLike,
+    direct: ArrayLike,
+    *,
+    ki: ArrayLike,
+    kd: ArrayLike,
+    pole: float,
+    fs: float,
+    delay: int,
 ) -> list[Controller]: ...
 
 class LinePlan:
