@@ -21,6 +21,7 @@ from ._atomic import atomic_path, atomic_text
 
 if TYPE_CHECKING:
     from .._experiment import Estimate
+    from .._sweep_result import SweepResult
 
 ESTIMATE_SUFFIXES = (".csv", ".nc")
 _COLUMNS = (  # CSV column -> (Estimate field or expression, unit)
@@ -226,17 +227,21 @@ def _csv_rows(text: str) -> np.ndarray:
 
 
 def _dataset_digest(ds) -> str:  # noqa: ANN001
+    return _variables_digest({name: ds[name].values for name in ds.variables}, ds.attrs)
+
+
+def _variables_digest(variables: dict[Any, Any], attrs: dict[str, Any]) -> str:
+    """The SHA-256 of a Dataset's variables (coordinates too: name -> values) and attributes (but ``sha256``)."""
     chunks: list[bytes] = []
-    for name in sorted(ds.variables):
-        values = np.asarray(ds[name].values)
+    for name in sorted(variables):
+        values = np.asarray(variables[name])
         chunks.append(str(name).encode())
         if values.dtype.kind in "OUS":
             chunks.append("\x1f".join(str(v) for v in values.ravel()).encode())
         else:
             kind = {"f": "<f8", "i": "<i8", "u": "<u8", "b": "<i8", "c": "<c16"}[values.dtype.kind]
             chunks.append(np.ascontiguousarray(values.astype(kind)).tobytes())
-    attrs = {k: v for k, v in ds.attrs.items() if k != "sha256"}
-    chunks.append(json.dumps(_jsonable(attrs), sort_keys=True).encode())
+    chunks.append(json.dumps(_jsonable({k: v for k, v in attrs.items() if k != "sha256"}), sort_keys=True).encode())
     return digest(chunks)
 
 
@@ -282,6 +287,86 @@ def write_netcdf(ds, path: str | Path) -> Path:  # noqa: ANN001
         with open(target, "ab") as handle:  # HDF5 ignores bytes past its end of file
             handle.write(FILE_TRAILER + _file_digest(target, target.stat().st_size).encode() + b"\n")
     return Path(path)
+
+
+def write_sweep_netcdf(result: SweepResult, path: str | Path) -> Path:
+    """A sweep's ``.nc`` file (:meth:`SweepResult.save`), written with h5netcdf alone, without building an
+    xarray Dataset: the variables, dimensions, attributes, fill values, fletcher32 filters and checksums of the
+    file xarray writes from :meth:`SweepResult.to_xarray` (a test compares them byte for byte), so
+    :func:`amb_fast.load_sweep` and ``xarray.open_dataset`` read the same dataset.
+
+    Building and writing the Dataset through xarray imports xarray (~0.4 s) and, where they are installed, dask,
+    distributed and pint (~0.6 s: xarray probes for their array types). Grids other than ``"product"`` (or arrays
+    of other kinds) go through xarray (``save_netcdf_with_xarray``).
+    """
+    from .._sweep_result import save_netcdf_with_xarray, unit_of
+
+    path = Path(path)
+    if result.grid != "product":
+        save_netcdf_with_xarray(result, path)
+        return path
+    try:
+        import h5netcdf
+        import h5py
+    except ImportError as error:
+        raise ImportError("writing .nc needs h5netcdf and h5py: pip install 'amb_fast[xarray]'") from error
+    dims = tuple(result.axes)
+    shape = result.shape
+
+    def grid(values: np.ndarray, units: str, lines: str = "freq") -> tuple[tuple[str, ...], np.ndarray, dict]:
+        return (*dims, lines), values.reshape(*shape, values.shape[-1]), {"units": units}
+
+    # SweepResult.to_xarray's variables, in the order its .nc file gets them (H split as in SweepResult.save)
+    variables: dict[str, tuple[tuple[str, ...], np.ndarray, dict]] = {
+        "k": grid(result.k, "N/m"),
+        "c": grid(result.c, "N s/m"),
+        "k_smooth": grid(result.k_smooth, "N/m"),
+        "c_smooth": grid(result.c_smooth, "N s/m"),
+        "k_std": grid(result.k_std, "N/m"),
+        "c_std": grid(result.c_std, "N s/m"),
+        "unexcited_displacement": grid(result.unexcited_displacement, "m", "unexcited_freq"),
+        "status": (dims, np.asarray(result.status).astype(str).reshape(shape), {}),
+        "settle_periods": (dims, np.asarray(result.settle_periods).reshape(shape), {}),
+        "seeds": (dims, np.asarray(result.seeds).reshape(shape), {}),
+        **{name: ((name,), np.asarray(values), {"units": unit_of(name)}) for name, values in result.axes.items()},
+        "freq": (("freq",), np.asarray(result.freq), {"units": "Hz"}),
+        "unexcited_freq": (("unexcited_freq",), np.asarray(result.unexcited_freq), {"units": "Hz"}),
+        "H_real": grid(result.H.real, "N/m"),
+        "H_imag": grid(result.H.imag, "N/m"),
+    }
+    if any(values.dtype.kind not in "fiuU" for _, values, _ in variables.values()):
+        save_netcdf_with_xarray(result, path)  # what xarray would encode (booleans, complex, dates ...)
+        return path
+    coords = {*dims, "freq", "unexcited_freq"}
+    attrs: dict[str, Any] = {"grid": result.grid, "periods": result.periods, "blocks": result.blocks,
+                             "meta": json.dumps(result.meta), "axes": json.dumps(list(result.axes)),
+                             "amb_fast_version": version()}  # fmt: skip
+    attrs["sha256"] = _variables_digest({name: values for name, (_, values, _) in variables.items()}, attrs)
+    require_space(path, sum(values.nbytes for _, values, _ in variables.values()))
+    with atomic_path(path) as target:
+        with h5netcdf.File(target, "w") as f:  # xarray's order: attributes, dimensions, variables
+            for key, value in attrs.items():
+                f.attrs[key] = value
+            for vdims, values, _ in variables.values():
+                for dim, size in zip(vdims, values.shape):
+                    if dim not in f.dimensions:
+                        f.dimensions[dim] = size
+            for name, (vdims, values, vattrs) in variables.items():
+                kind = values.dtype.kind
+                var = f.create_variable(
+                    name,
+                    vdims,
+                    dtype=h5py.string_dtype() if kind == "U" else values.dtype,
+                    fillvalue=np.array(np.nan, values.dtype) if kind == "f" else None,
+                    chunks=None,
+                    fletcher32=name not in coords and kind in "fiu" and values.ndim >= 1 and values.size > 0,
+                )
+                for key, value in vattrs.items():
+                    var.attrs[key] = value
+                var[...] = values.astype(object) if kind == "U" else values
+        with open(target, "ab") as handle:  # as write_netcdf: the SHA-256 of the file's bytes after them
+            handle.write(FILE_TRAILER + _file_digest(target, target.stat().st_size).encode() + b"\n")
+    return path
 
 
 #: Written after the HDF5 data: the SHA-256 of every byte before it, checked before HDF5 sees the file.
