@@ -6,7 +6,9 @@
    the loop's closed-loop transfer function.
 2. The same sweep on 1 and 2 worker threads, and a 40-point sweep on 1 and 2 (the issue's scaling
    case: too few points to hide an uneven split): medians of each in blocks, and the median ratio of
-   interleaved pairs (the goal's measure: robust to the machine's drift between blocks).
+   interleaved pairs (the goal's measure: robust to the machine's drift between blocks). Beside them,
+   the same pairs for the core's call alone and for pure arithmetic (eigenvalues of a large stack of
+   small matrices): what the shared machine gives two threads at that moment.
 3. predict over 10^5 gain sets x 200 lines against a plain loop over gain sets calling predict.
 4. Peak memory of a 10^5-point sweep (10 Hz fundamental, 20 lines) against the size of its estimates.
 
@@ -96,6 +98,16 @@ def main() -> None:
         core_ratios.append(one / two)
     paired["scaling 1 -> 2 workers, 40 points, the core's call alone, interleaved pairs"] = float(
         np.median(core_ratios)
+    )
+    # And what two threads give on pure arithmetic with nothing shared at that moment (the eigenvalues of
+    # 4,000 random 7x7 matrices, split in halves): the ceiling of any scaling measured beside it.
+    stack = np.random.default_rng(0).random((4000, 7, 7))
+    ceiling = []
+    for _ in range(2 * repeats + 1):
+        one, two = (median_seconds(lambda w=w: _core.eigenvalues(stack, w), 1, warm_up=False) for w in (1, 2))
+        ceiling.append(one / two)
+    paired["scaling 1 -> 2 threads of pure arithmetic (the machine's ceiling), interleaved pairs"] = float(
+        np.median(ceiling)
     )
     single = median_seconds(lambda: af.run_experiment(rig, pid, sphs), 5 * repeats)
     single_samples = (result.settle_periods[0] + result.periods) * sphs.period_samples
