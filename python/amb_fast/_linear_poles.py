@@ -121,7 +121,11 @@ def spectral_radius(
     Returns one radius per gain set (stable: < 1), in the broadcast shape of the gains, flattened. A
     single run and a sweep use this same computation, so they choose the same settling time.
     """
-    gains = _gain_arrays(pid, kp, ki, kd)
+    return _radius_of_gains(rig, pid, _gain_arrays(pid, kp, ki, kd), workers)
+
+
+def _radius_of_gains(rig: Rig, pid: PID, gains: np.ndarray, workers: int = 1) -> np.ndarray:
+    """:func:`spectral_radius` of the gain sets already laid out by :func:`_gain_arrays` (sweeps)."""
     radius = np.empty(len(gains))
     for rows, stack in _closed_loop_stacks(rig, pid, gains):
         radius[rows] = np.max(np.abs(_eigenvalues(stack, workers)), axis=-1)

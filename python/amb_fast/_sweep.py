@@ -17,7 +17,8 @@ from ._blas import one_blas_thread
 from ._dispatch import two_axis_aware
 from ._excitation import Multisine
 from ._experiment import _plan, _window, automatic_settle
-from ._linear import AnyController, _gain_arrays, core_controller, is_controller, loop_poles, spectral_radius
+from ._linear import AnyController, _gain_arrays, core_controller, is_controller, loop_poles
+from ._linear_poles import _radius_of_gains
 from ._params import PID, Rig
 from ._sweep_result import OVERFLOW, STATUS, STATUS_NAMES, SWEPT, SweepResult, unit_of
 from ._validate import integer, require, rig_and_controller, seed_value
@@ -105,11 +106,10 @@ def _run_chunk(
         # PID gains only: the closed loop is affine in them, so all radii come in one call, and the core's
         # controllers are made from the gain arrays without a PID per point.
         assert rig is not None
-        swept = {name: values[name] for name in names}
-        radius = spectral_radius(rig, controller, **swept, workers=workers)
+        gains = _gain_arrays(controller, values.get("kp"), values.get("ki"), values.get("kd"))
+        radius = _radius_of_gains(rig, controller, gains, workers)  # spectral_radius's numbers
         rigs: list[Rig] = [rig] * n
         controllers: list[AnyController] = [controller] * n  # what the settling rule reads: the same fs
-        gains = _gain_arrays(controller, swept.get("kp"), swept.get("ki"), swept.get("kd"))
         core_controllers = controller._core_controllers(gains)
     else:
         models = [point_model(rig, controller, {k: float(values[k][j]) for k in names}, factory)  # type: ignore[arg-type]
@@ -146,9 +146,11 @@ def _run_chunk(
         masses = {rigs[j].mass for j in rows}
         require(len(masses) == 1, "mass", sorted(masses), "the same at every point of a sweep (kg)")
 
+        core_rigs = {id(r): r._to_core() for r in {id(rigs[j]): rigs[j] for j in rows}.values()}  # once per rig
+
         def core_call(pick: np.ndarray):  # noqa: ANN202
             at = rows[pick]
-            return _core.run_sweep(excitation.samples, [rigs[j]._to_core() for j in at],
+            return _core.run_sweep(excitation.samples, [core_rigs[id(rigs[j])] for j in at],
                                    [core_controllers[j] for j in at], settle64[at],
                                    seeds[at], periods, plan, window, workers, start == "steady")  # fmt: skip
 
