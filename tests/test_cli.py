@@ -44,6 +44,19 @@ def test_a_touchdown_is_one_line_with_exit_status_1_and_a_traceback_only_with_de
     assert status == 1 and "Traceback" in err and "TouchdownError" in err
 
 
+def test_the_package_and_the_command_load_scipy_signal_optimize_stats_only_when_used() -> None:
+    """``import amb_fast`` and ``amb-fast --help`` leave out scipy.signal, scipy.optimize and scipy.stats
+    (half a second of every start: they load with the first controller design or calibration), and the
+    names that need them still resolve."""
+    heavy = ("scipy.signal", "scipy.optimize", "scipy.stats", "matplotlib")
+    code = (f"import sys, amb_fast, amb_fast.cli; amb_fast.cli.build_parser(); print([m for m in {heavy!r} "
+            "if m in sys.modules]); amb_fast.fit_rig, amb_fast.calibration.Design, amb_fast.notch(50.0); "
+            "print(sorted(m for m in ('scipy.signal', 'scipy.optimize') if m in sys.modules))")  # fmt: skip
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split("\n")
+    assert out[0] == "[]", out
+    assert out[1] == "['scipy.optimize', 'scipy.signal']", out
+
+
 def test_the_command_line_as_a_separate_process(tmp_path) -> None:
     done = subprocess.run([sys.executable, "-m", "amb_fast", "sweep", "--kp", "2000", "--out", "s.xlsx"], cwd=tmp_path,
                           capture_output=True, text=True, timeout=120)  # fmt: skip

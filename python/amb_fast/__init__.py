@@ -11,6 +11,7 @@ compare against exact answers: the README's "Defaults" table lists both side by 
 from __future__ import annotations
 
 from importlib.metadata import PackageNotFoundError, version
+from typing import TYPE_CHECKING
 
 try:
     from . import _core  # noqa: F401
@@ -36,7 +37,6 @@ from ._params import PID, Rig
 from ._simulate import Trace, simulate
 from ._sweep import sweep
 from ._sweep_result import SweepResult, load_sweep
-from .calibration import Design, RigFit, design_controller, fit_rig
 from .controllers import (
     Controller,
     gain,
@@ -52,14 +52,22 @@ from .controllers import (
 from .io import Recording, load_estimate, load_recording, save_recording
 from .two_axis import Estimate2, TwoAxisRig, plot_coefficients2
 
+if TYPE_CHECKING:
+    from .calibration import Design, RigFit, design_controller, fit_rig
+
 _PLOTS = ("plot_actual", "plot_coefficients", "plot_effective", "plot_estimate", "plot_family", "plot_overlay")
+_CALIBRATION = ("Design", "RigFit", "design_controller", "fit_rig")
 
 
-def __getattr__(name: str):  # noqa: ANN202 - figures load matplotlib (the optional extra) on first use
-    if name in _PLOTS:
+def __getattr__(name: str):  # noqa: ANN202 - loaded on first use: see below
+    if name in _PLOTS:  # matplotlib, the optional extra
         from . import plots
 
         return getattr(plots, name)
+    if name in _CALIBRATION:  # scipy.optimize and scipy.stats: half a second of every import otherwise
+        from . import calibration
+
+        return getattr(calibration, name)
     raise AttributeError(f"module 'amb_fast' has no attribute {name!r}")
 
 

@@ -16,7 +16,22 @@ report), ``_design`` (:func:`design_controller` and :class:`Design`), ``_cli`` (
 
 from __future__ import annotations
 
-from ._design import Design, design_controller
-from ._fit import RigFit, fit_rig
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ._design import Design, design_controller
+    from ._fit import RigFit, fit_rig
 
 __all__ = ["Design", "RigFit", "design_controller", "fit_rig"]
+
+
+def __getattr__(name: str):  # noqa: ANN202 - scipy.optimize and scipy.stats load on first use (half a second)
+    if name in ("Design", "design_controller"):
+        from . import _design
+
+        return getattr(_design, name)
+    if name in ("RigFit", "fit_rig"):
+        from . import _fit
+
+        return getattr(_fit, name)
+    raise AttributeError(f"module 'amb_fast.calibration' has no attribute {name!r}")

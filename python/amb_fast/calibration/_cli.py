@@ -17,8 +17,6 @@ import numpy as np
 from .._experiment import Estimate, UnexcitedLines
 from .._params import PID, Rig
 from ..io import load_estimate
-from ._design import design_controller
-from ._fit import fit_rig
 from ._problem import FITTABLE
 
 _COLUMNS = ("freq_Hz", "H_real_N_per_m", "H_imag_N_per_m", "k_std_N_per_m", "c_std_Ns_per_m")
@@ -163,6 +161,8 @@ def cmd_fit(args: argparse.Namespace) -> None:
     rig = _rig(args)
     estimates = [read_estimate(p, blocks=args.periods, mass=rig.mass) for p in args.estimates]
     controllers = _controllers(args, len(estimates))
+    from ._fit import fit_rig  # scipy.optimize and scipy.stats: only for this command
+
     result = fit_rig(estimates, rig, controllers, free=args.free)
     print(result.report())
 
@@ -197,6 +197,8 @@ def cmd_design(args: argparse.Namespace) -> None:
     (controller,) = _controllers(args, 1)
     kwargs: dict[str, Any] = dict(freq=freq, stiffness=args.stiffness, damping=args.damping, free=args.free,
                                   max_sensitivity=args.max_sensitivity)  # fmt: skip
+    from ._design import design_controller  # scipy.optimize: only for this command
+
     actual = design_controller(rig, controller, **kwargs)
     naive = design_controller(rig, controller, **kwargs, basis="effective")
     print(actual.report())

@@ -7,7 +7,6 @@ from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy import signal
 
 from .._validate import integer, real, require
 from ._controller import _REBUILDERS, Controller
@@ -128,6 +127,8 @@ def low_pass(freq: float, order: int = 1, damping: float | None = None, fs: floa
         local["damping"] = zeta
         num, den = [w**2], [1.0, 2 * zeta * w, w**2]
     else:
+        from scipy import signal  # on first use: importing it takes half a second
+
         b, a = signal.butter(n, w, analog=True)
         num, den = list(np.atleast_1d(b)), list(a)
     return _block("low_pass", num, den, fs, fc, local, fixed=(n,))

@@ -13,7 +13,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import signal
 
 from .._validate import integer, real, require
 from ._statespace import (
@@ -203,6 +202,8 @@ class _Constructors:
         require(fs is not None, "fs", fs, "given for a continuous sys (the sampling frequency to discretise at, Hz)")
         assert fs is not None
         if isinstance(sys, control.StateSpace):
+            from scipy import signal  # on first use: importing it takes half a second
+
             num, den = signal.ss2tf(sys.A, sys.B, sys.C, sys.D)
             num = num[0]
         else:

@@ -11,7 +11,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import signal
 
 from .._validate import real, require
 
@@ -202,6 +201,8 @@ def _discretise(num: np.ndarray, den: np.ndarray, fs: float, method: str, prewar
         real("prewarp", prewarp, "Hz", positive=True)
         require(method == "tustin", "prewarp", prewarp, "None unless method='tustin'")
         require(prewarp < fs / 2, "prewarp", prewarp, f"below the Nyquist frequency {fs / 2} Hz")
+    from scipy import signal  # on first use: importing it takes half a second
+
     zeros, poles = np.roots(num), np.roots(den)
     k = num[0] / den[0]
     T = 1.0 / fs
