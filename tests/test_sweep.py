@@ -66,6 +66,33 @@ def test_sweep_points_equal_single_runs_bit_for_bit(setup) -> None:
         assert np.all(np.isnan(result.k[i])) and np.all(np.isnan(result.H[i]))
 
 
+def test_a_sweep_of_one_controller_shape_checks_stability_in_the_core(setup, monkeypatch) -> None:
+    """kp alone (every point has the PID's two states) from the steady start: the settling time needs no
+    poles, so the core's workers check each point's stability as they run them (not the calling thread
+    first). The same flags as the loop's poles, NaN rows for the unstable points, the rest bit for bit."""
+    from amb_fast import _sweep
+
+    rig, pid, excitation = setup
+
+    def not_here(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
+        raise AssertionError("the stability check ran in the calling thread")
+
+    monkeypatch.setattr(_sweep, "_radius_of_gains", not_here)
+    kp = [500.0, 1800.0, 300.0, 2400.0, 2600.0]
+    for workers in (1, 2):
+        result = af.sweep(rig, pid, excitation, kp=kp, seed=11, periods=4, workers=workers, progress=False)
+        for i, status in enumerate(result.status):
+            point = replace(pid, kp=kp[i])
+            assert (status == "unstable") == (np.abs(af.closed_loop_poles(rig, point)).max() >= 1)
+        assert list(result.status) == ["unstable", "ok", "unstable", "ok", "ok"]
+        for i in (0, 2):
+            assert np.all(np.isnan(result.k[i])) and np.all(np.isnan(result.H[i]))
+        for i in (1, 3, 4):
+            single = af.run_experiment(rig, replace(pid, kp=kp[i]), excitation, periods=4, seed=int(result.seeds[i]))
+            np.testing.assert_array_equal(result.k[i], single.k)
+            np.testing.assert_array_equal(result.H[i], single.H)
+
+
 def test_workers_and_executors_change_nothing(setup) -> None:
     rig, pid, excitation = setup
     kwargs = dict(kp=np.linspace(1800, 2600, 7), ki=[0.0, 1e4, 3e4], seed=5, periods=3)

@@ -23,6 +23,7 @@ void bind_sweep(py::module_& m) {
         .def_readonly("c_smooth", &SweepEstimates::c_smooth)
         .def_readonly("unexcited_displacement", &SweepEstimates::unexcited_displacement)
         .def_readonly("status", &SweepEstimates::status)
+        .def_readonly("radius", &SweepEstimates::radius)
         .def_readonly("periods", &SweepEstimates::periods)
         .def_readonly("blocks", &SweepEstimates::blocks);
 
@@ -32,10 +33,18 @@ void bind_sweep(py::module_& m) {
            const std::vector<Controller>& controllers,
            const Eigen::Ref<const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>>& settle_periods,
            const Eigen::Ref<const Eigen::Matrix<std::uint64_t, Eigen::Dynamic, 1>>& seeds, Eigen::Index periods,
-           const LinePlan& plan, int median_window, int workers, bool steady_start) {
+           const LinePlan& plan, int median_window, int workers, bool steady_start,
+           const std::optional<py::array_t<double, py::array::c_style | py::array::forcecast>>& loop_matrices) {
             const auto n = static_cast<Eigen::Index>(controllers.size());
             if (static_cast<Eigen::Index>(rigs.size()) != n || settle_periods.size() != n || seeds.size() != n)
                 throw std::invalid_argument("rigs, controllers, settle_periods and seeds must have one entry per point");
+            LoopMatrices loops;
+            if (loop_matrices) {
+                const auto& a = *loop_matrices;
+                if (a.ndim() != 3 || a.shape(0) != n || a.shape(1) != a.shape(2) || a.shape(1) == 0)
+                    throw std::invalid_argument("loop_matrices must have shape (points, m, m)");
+                loops = {a.data(), static_cast<Eigen::Index>(a.shape(1))};
+            }
             std::vector<SweepPoint> points;
             points.reserve(static_cast<std::size_t>(n));
             for (Eigen::Index g = 0; g < n; ++g) {
@@ -43,13 +52,14 @@ void bind_sweep(py::module_& m) {
                 points.push_back({rigs[k], controllers[k], settle_periods[g], seeds[g]});
             }
             return interruptible(
-                [&] { return run_sweep(period_force, points, periods, plan, median_window, workers, steady_start); });
+                [&] { return run_sweep(period_force, points, periods, plan, median_window, workers, steady_start, loops); });
         },
         py::arg("period_force"), py::arg("rigs"), py::arg("controllers"), py::arg("settle_periods"), py::arg("seeds"),
         py::arg("periods"), py::arg("plan"), py::arg("median_window"), py::arg("workers"),
-        py::arg("steady_start") = false,
+        py::arg("steady_start") = false, py::arg("loop_matrices") = std::nullopt,
         "Runs one experiment per point (rig, controller) on `workers` threads (<= 0: all cores), GIL released; "
-        "Ctrl-C stops it.");
+        "Ctrl-C stops it. With loop_matrices (points, m, m), each point's closed-loop matrix, the workers check "
+        "stability first: a point of spectral radius >= 1 is flagged unstable and not run (radius: every point's).");
     m.def(
         "eigenvalues",
         [](const py::array_t<double, py::array::c_style | py::array::forcecast>& stack, int workers) {

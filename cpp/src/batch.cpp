@@ -160,8 +160,24 @@ void in_shares(Eigen::Index count, int workers, Work&& work) {
 
 }  // namespace
 
+namespace {
+using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// The eigenvalues of one m x m matrix (row-major) into values[0..m), balanced as LAPACK's geev does (the
+// small poles keep their digits): the one routine of `eigenvalues` and of run_sweep's stability check.
+void eigenvalues_of(const double* matrix, Eigen::Index m, Eigen::EigenSolver<Eigen::MatrixXd>& solver,
+                    std::complex<double>* values) {
+    const Eigen::MatrixXd A = Eigen::Map<const RowMatrix>(matrix, m, m);
+    const Eigen::VectorXd d = balancing(A);
+    solver.compute(d.cwiseInverse().asDiagonal() * A * d.asDiagonal(), false);
+    if (solver.info() != Eigen::Success) throw std::runtime_error("eigenvalues did not converge");
+    for (Eigen::Index i = 0; i < m; ++i) values[i] = solver.eigenvalues()[i];
+}
+}  // namespace
+
 SweepEstimates run_sweep(const Eigen::Ref<const Eigen::VectorXd>& period_force, const std::vector<SweepPoint>& points,
-                         Eigen::Index periods, LinePlan plan, int median_window, int workers, bool steady_start) {
+                         Eigen::Index periods, LinePlan plan, int median_window, int workers, bool steady_start,
+                         LoopMatrices loops) {
     const Eigen::Index L = plan.period;
     require(period_force.size() == L, "excitation length", period_force.size(), "one period of plan.period samples");
     require_finite_samples("excitation", period_force.data(), L);
@@ -190,23 +206,42 @@ SweepEstimates run_sweep(const Eigen::Ref<const Eigen::VectorXd>& period_force, 
 
     const Eigen::VectorXd force = period_force;
     // Contiguous shares, so each point's numbers do not depend on how many workers there are.
+    out.radius.setConstant(n, nan);
     in_shares(n, workers, [&](Eigen::Index begin, Eigen::Index end) {
-        run_points(force, points.data() + begin, end - begin, periods, plan, median_window, steady_start, out, begin);
+        if (!loops.stack) {
+            run_points(force, points.data() + begin, end - begin, periods, plan, median_window, steady_start, out, begin);
+            return;
+        }
+        // Stability first (in parallel, as the points run), then each run of consecutive stable points.
+        Eigen::EigenSolver<Eigen::MatrixXd> solver(loops.m);
+        std::vector<std::complex<double>> values(static_cast<std::size_t>(loops.m));
+        for (Eigen::Index k = begin; k < end; ++k) {
+            eigenvalues_of(loops.stack + k * loops.m * loops.m, loops.m, solver, values.data());
+            double radius = 0.0;
+            for (const auto& v : values) radius = std::max(radius, std::abs(v));
+            out.radius[k] = radius;
+            if (!(radius < 1.0)) out.status[k] = static_cast<int>(PointStatus::unstable);
+        }
+        for (Eigen::Index k = begin; k < end;) {
+            if (out.status[k] == static_cast<int>(PointStatus::unstable)) {
+                ++k;
+                continue;
+            }
+            Eigen::Index stop = k;
+            while (stop < end && out.status[stop] != static_cast<int>(PointStatus::unstable)) ++stop;
+            run_points(force, points.data() + k, stop - k, periods, plan, median_window, steady_start, out, k);
+            k = stop;
+        }
     });
     return out;
 }
 
 void eigenvalues(const double* stack, Eigen::Index count, Eigen::Index m, std::complex<double>* values, int workers) {
-    using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
     in_shares(count, workers, [&](Eigen::Index begin, Eigen::Index end) {
         Eigen::EigenSolver<Eigen::MatrixXd> solver(m);
         for (Eigen::Index k = begin; k < end; ++k) {
             if (k % 64 == 0) poll_interrupt();
-            const Eigen::MatrixXd A = Eigen::Map<const RowMatrix>(stack + k * m * m, m, m);
-            const Eigen::VectorXd d = balancing(A);  // as LAPACK's geev: the small poles keep their digits
-            solver.compute(d.cwiseInverse().asDiagonal() * A * d.asDiagonal(), false);
-            if (solver.info() != Eigen::Success) throw std::runtime_error("eigenvalues did not converge");
-            for (Eigen::Index i = 0; i < m; ++i) values[k * m + i] = solver.eigenvalues()[i];
+            eigenvalues_of(stack + k * m * m, m, solver, values + k * m);
         }
     });
 }

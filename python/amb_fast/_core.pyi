@@ -91,17 +91,15 @@ class LineEstimate:
 
 class SweepEstimates:
     H: np.ndarray
-    force: np.ndarray
-    displacement: np.ndarray
     k: np.ndarray
     c: np.ndarray
     k_std: np.ndarray
     c_std: np.ndarray
     k_smooth: np.ndarray
     c_smooth: np.ndarray
-    unexcited_force: np.ndarray
     unexcited_displacement: np.ndarray
     status: np.ndarray
+    radius: np.ndarray
     periods: int
     blocks: int
 
@@ -144,6 +142,7 @@ def run_sweep(
     median_window: int,
     workers: int,
     steady_start: bool = False,
+    loop_matrices: ArrayLike | None = None,
 ) -> SweepEstimates: ...
 def eigenvalues(stack: ArrayLike, workers: int = 1) -> np.ndarray: ...
 

@@ -18,7 +18,7 @@ from ._dispatch import two_axis_aware
 from ._excitation import Multisine
 from ._experiment import _plan, _window, automatic_settle
 from ._linear import AnyController, _gain_arrays, core_controller, is_controller, loop_poles
-from ._linear_poles import _radius_of_gains
+from ._linear_poles import _closed_loop_stacks, _radius_of_gains
 from ._params import PID, Rig
 from ._sweep_result import OVERFLOW, STATUS, STATUS_NAMES, SWEPT, SweepResult, unit_of
 from ._validate import integer, require, rig_and_controller, seed_value
@@ -102,15 +102,23 @@ def _run_chunk(
     the settling time, then one batched core call for the stable points."""
     n = len(seeds)
     names = list(values)
+    in_core: np.ndarray | None = None  # the points' loop matrices, where the core checks their stability
+    radius = np.full(n, np.nan)
     if factory is None and isinstance(controller, PID) and set(names) <= set(SWEPT):
         # PID gains only: the closed loop is affine in them, so all radii come in one call, and the core's
         # controllers are made from the gain arrays without a PID per point.
         assert rig is not None
         gains = _gain_arrays(controller, values.get("kp"), values.get("ki"), values.get("kd"))
-        radius = _radius_of_gains(rig, controller, gains, workers)  # spectral_radius's numbers
         rigs: list[Rig] = [rig] * n
         controllers: list[AnyController] = [controller] * n  # what the settling rule reads: the same fs
         core_controllers = controller._core_controllers(gains)
+        stacks = list(_closed_loop_stacks(rig, controller, gains))
+        if len(stacks) == 1 and (settle_periods is not None or (start == "steady" and rig.force_law == "linear")):
+            # The settling time does not need the poles: the core's workers check stability as they run
+            # the points (the same eigenvalues as spectral_radius), instead of this thread before them.
+            in_core = np.ascontiguousarray(stacks[0][1])
+        else:
+            radius = _radius_of_gains(rig, controller, gains, workers)  # spectral_radius's numbers
     else:
         models = [point_model(rig, controller, {k: float(values[k][j]) for k in names}, factory)  # type: ignore[arg-type]
                   for j in range(n)]  # fmt: skip
@@ -118,10 +126,12 @@ def _run_chunk(
         rigs, controllers = [r for r, _ in models], [c for _, c in models]
         core_controllers = [core_controller(c) for c in controllers]
     fs = excitation.fs
-    for c in controllers:
+    for c in {id(c): c for c in controllers}.values():  # each distinct controller once
         require(c.fs == fs, "controller fs", c.fs, f"equal to the excitation's fs ({fs} Hz)")
-    stable = radius < 1.0
-    if settle_periods is None:  # the rule of run_experiment, so every point reruns bit for bit
+    stable = radius < 1.0 if in_core is None else np.ones(n, dtype=bool)  # in the core: flagged there
+    if in_core is not None and settle_periods is None:  # one linear rig from the steady start: none
+        settle = np.zeros(n, dtype=np.int64)
+    elif settle_periods is None:  # the rule of run_experiment, so every point reruns bit for bit
         period = excitation.period_samples
         settle = np.array([automatic_settle(r, c, float(rad), period, start) if ok else 0
                            for r, c, rad, ok in zip(rigs, controllers, radius, stable)])  # fmt: skip
@@ -151,8 +161,9 @@ def _run_chunk(
         def core_call(pick: np.ndarray):  # noqa: ANN202
             at = rows[pick]
             return _core.run_sweep(excitation.samples, [core_rigs[id(rigs[j])] for j in at],
-                                   [core_controllers[j] for j in at], settle64[at],
-                                   seeds[at], periods, plan, window, workers, start == "steady")  # fmt: skip
+                                   [core_controllers[j] for j in at], settle64[at], seeds[at], periods, plan,
+                                   window, workers, start == "steady",
+                                   None if in_core is None else in_core[at])  # fmt: skip
 
         everything = np.arange(rows.size)
         overflowed: list[int] = []
@@ -175,10 +186,9 @@ def _run_chunk(
                 for name in _CORE_FIELDS:
                     out[name][rows[pick]] = np.asarray(getattr(core, name))
             out["status"][overflowed] = STATUS_NAMES.index(OVERFLOW)
-        for j in rows:  # no clearance to touch on the linear law: the state overflowed
-            point_rig = rigs[j]
-            unbounded = point_rig.force_law == "linear" and point_rig.clearance is None
-            if out["status"][j] == STATUS.index("touchdown") and unbounded:
+        for j in rows[out["status"][rows] == STATUS.index("touchdown")]:
+            point_rig = rigs[j]  # no clearance to touch on the linear law: the state overflowed
+            if point_rig.force_law == "linear" and point_rig.clearance is None:
                 out["status"][j] = STATUS_NAMES.index(OVERFLOW)
     out["settle_periods"] = settle64
     return out
