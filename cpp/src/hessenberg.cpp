@@ -191,6 +191,10 @@ __attribute__((target("avx2"))) void solve_avx2(const ConstFactors& f, double* r
 __attribute__((target("avx2"))) void solve_transposed_avx2(const ConstFactors& f, double* re, double* im) {
     solve_transposed_kernel(f, re, im);
 }
+#else  // simd_avx2() is false here: the names only keep the dispatch below free of #if
+constexpr auto factor_avx2 = factor_portable;
+constexpr auto solve_avx2 = solve_portable;
+constexpr auto solve_transposed_avx2 = solve_transposed_portable;
 #endif
 }  // namespace
 
@@ -207,28 +211,18 @@ HessenbergLU::HessenbergLU(const Eigen::MatrixXd& H)
 
 void HessenbergLU::factor(const cd* z) {
     const Factors f{n_, H_.data(), ur_.data(), ui_.data(), dr_.data(), di_.data(), mr_.data(), mi_.data(), swapped_.data()};
-#if AMB_FAST_WIDE_LANES
-    const bool regular = simd_avx2() ? factor_avx2(f, z) : factor_portable(f, z);
-#else
-    const bool regular = factor_portable(f, z);
-#endif
-    if (!regular) throw std::invalid_argument("zI - H is singular: z is a pole of the loop");
+    if (!(simd_avx2() ? factor_avx2 : factor_portable)(f, z))
+        throw std::invalid_argument("zI - H is singular: z is a pole of the loop");
 }
 
 void HessenbergLU::solve(double* re, double* im) const {
     const ConstFactors f{n_, H_.data(), ur_.data(), ui_.data(), dr_.data(), di_.data(), mr_.data(), mi_.data(), swapped_.data()};
-#if AMB_FAST_WIDE_LANES
-    if (simd_avx2()) return solve_avx2(f, re, im);
-#endif
-    solve_portable(f, re, im);
+    (simd_avx2() ? solve_avx2 : solve_portable)(f, re, im);
 }
 
 void HessenbergLU::solve_transposed(double* re, double* im) const {
     const ConstFactors f{n_, H_.data(), ur_.data(), ui_.data(), dr_.data(), di_.data(), mr_.data(), mi_.data(), swapped_.data()};
-#if AMB_FAST_WIDE_LANES
-    if (simd_avx2()) return solve_transposed_avx2(f, re, im);
-#endif
-    solve_transposed_portable(f, re, im);
+    (simd_avx2() ? solve_transposed_avx2 : solve_transposed_portable)(f, re, im);
 }
 
 }  // namespace amb_fast
