@@ -98,15 +98,16 @@ def _run_chunk(
     workers: int, start: str = "steady",
 ) -> dict[str, np.ndarray]:  # fmt: skip
     """One unit of work, for a thread or any executor (picklable arguments, numpy results): each
-    point's rig and controller, the stability check (an unstable point is flagged, never simulated),
-    the settling time, then one batched core call for the stable points."""
+    point's rig and controller, the stability check (an unstable point is flagged, never simulated;
+    made here, or by the core's workers where the settling time needs no poles), the settling time,
+    then one batched core call for the stable points."""
     n = len(seeds)
     names = list(values)
     in_core: np.ndarray | None = None  # the points' loop matrices, where the core checks their stability
     radius = np.full(n, np.nan)
     if factory is None and isinstance(controller, PID) and set(names) <= set(SWEPT):
-        # PID gains only: the closed loop is affine in them, so all radii come in one call, and the core's
-        # controllers are made from the gain arrays without a PID per point.
+        # PID gains only: the closed loop is affine in them, so all loop matrices come from four cached
+        # ones, and the core's controllers are made from the gain arrays without a PID per point.
         assert rig is not None
         gains = _gain_arrays(controller, values.get("kp"), values.get("ki"), values.get("kd"))
         rigs: list[Rig] = [rig] * n
