@@ -1,3 +1,4 @@
+#include "amb_fast/estimate2x2.hpp"
 #include "amb_fast/mimo_lines.hpp"
 #include "bindings.hpp"
 

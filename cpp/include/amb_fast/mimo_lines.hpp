@@ -1,4 +1,4 @@
-// The MIMO loop's experiments reduced to line spectra, and the 2x2 estimate from them.
+// The MIMO loop's experiments reduced to line spectra (the 2x2 estimate from them: estimate2x2.hpp).
 //
 // From rest the loop runs sample by sample (mimo.hpp) and every period is transformed. From the
 // periodic steady state the line spectra are drawn directly, exactly in distribution: the loop is
@@ -88,17 +88,5 @@ private:
     Eigen::MatrixXd V_, Z_, draws_, change_re_, change_im_;
     Eigen::Index left_ = 0, drawn_ = 0, next_ = 0;  // periods not yet drawn; in the block; handed out
 };
-
-// The 2x2 estimate H = F Y^-1 per line from both experiments' per-period line spectra, laid out as
-// mimo_line_experiments writes them (2 channels, 2 experiments): F, Y the period means, and the
-// variance of H's real and imaginary parts from the linearised dH = (dF - H dY) Y^-1 of every period
-// (sum of squares / (P (P - 1))). Matrices per line, row-major 2x2: [line][i][j].
-struct Estimate2x2 {
-    Eigen::Index lines = 0, periods = 0;
-    std::vector<std::complex<double>> H, receptance, force, displacement;  // force, displacement: [line][channel][experiment]
-    std::vector<double> var_re, var_im;
-};
-Estimate2x2 estimate_2x2(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines,
-                         Eigen::Index periods, Eigen::Index lines);
 
 }  // namespace amb_fast

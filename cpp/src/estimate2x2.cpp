@@ -1,0 +1,76 @@
+#include "amb_fast/estimate2x2.hpp"
+
+#include <array>
+#include <cmath>
+#include <stdexcept>
+
+#include "amb_fast/errors.hpp"
+
+namespace amb_fast {
+
+using cd = std::complex<double>;
+
+namespace {
+using Matrix22 = std::array<cd, 4>;  // row-major 2x2: (0, 0), (0, 1), (1, 0), (1, 1)
+
+// 1 / x without the library's scaled division (x: a determinant of well-conditioned line spectra).
+cd reciprocal(cd x) { return std::conj(x) / std::norm(x); }
+
+Matrix22 product(const Matrix22& a, const Matrix22& b) {
+    return {a[0] * b[0] + a[1] * b[2], a[0] * b[1] + a[1] * b[3], a[2] * b[0] + a[3] * b[2], a[2] * b[1] + a[3] * b[3]};
+}
+Matrix22 inverse(const Matrix22& a) {
+    const cd inv = reciprocal(a[0] * a[3] - a[1] * a[2]);
+    return {a[3] * inv, -a[1] * inv, -a[2] * inv, a[0] * inv};
+}
+}  // namespace
+
+Estimate2x2 estimate_2x2(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines,
+                         Eigen::Index periods, Eigen::Index lines) {
+    require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
+    Estimate2x2 est;
+    est.lines = lines;
+    est.periods = periods;
+    const auto n = static_cast<std::size_t>(4 * lines);
+    for (auto* v : {&est.H, &est.receptance, &est.force, &est.displacement}) v->resize(n);
+    est.var_re.resize(n);
+    est.var_im.resize(n);
+    // [period][line][channel][experiment]: one 2x2 matrix (row: channel, column: experiment), row-major.
+    const auto at = [&](const cd* x, Eigen::Index period, Eigen::Index j) {
+        const cd* m = x + (period * lines + j) * 4;
+        return Matrix22{m[0], m[1], m[2], m[3]};
+    };
+    const double mean = 1.0 / static_cast<double>(periods), scale = 1.0 / static_cast<double>(periods * (periods - 1));
+    for (Eigen::Index j = 0; j < lines; ++j) {
+        Matrix22 F{}, Y{};  // the period means
+        for (Eigen::Index period = 0; period < periods; ++period) {
+            const Matrix22 f = at(force_lines, period, j), y = at(displacement_lines, period, j);
+            for (int e = 0; e < 4; ++e) F[e] += f[e], Y[e] += y[e];
+        }
+        for (int e = 0; e < 4; ++e) {
+            F[e] *= mean, Y[e] *= mean;
+            if (!std::isfinite(F[e].real() + F[e].imag() + Y[e].real() + Y[e].imag()))
+                throw std::invalid_argument("force and displacement must be finite");
+        }
+        const Matrix22 Yinv = inverse(Y), H = product(F, Yinv), receptance = inverse(H);
+        // Linearised: dH = (dF - H dY) Y^-1 per period; the variance of Re H and Im H is the sum of the
+        // squares / (P (P - 1)).
+        double re[4] = {0, 0, 0, 0}, im[4] = {0, 0, 0, 0};
+        for (Eigen::Index period = 0; period < periods; ++period) {
+            Matrix22 dF = at(force_lines, period, j), dY = at(displacement_lines, period, j);
+            for (int e = 0; e < 4; ++e) dF[e] -= F[e], dY[e] -= Y[e];
+            const Matrix22 HdY = product(H, dY);
+            for (int e = 0; e < 4; ++e) dF[e] -= HdY[e];
+            const Matrix22 dH = product(dF, Yinv);
+            for (int e = 0; e < 4; ++e) re[e] += dH[e].real() * dH[e].real(), im[e] += dH[e].imag() * dH[e].imag();
+        }
+        for (int e = 0; e < 4; ++e) {
+            const auto k = static_cast<std::size_t>(4 * j + e);
+            est.H[k] = H[e], est.receptance[k] = receptance[e], est.force[k] = F[e], est.displacement[k] = Y[e];
+            est.var_re[k] = re[e] * scale, est.var_im[k] = im[e] * scale;
+        }
+    }
+    return est;
+}
+
+}  // namespace amb_fast
