@@ -117,16 +117,22 @@ class SweepResult:
             import xarray as xr
         except ImportError as error:
             raise ImportError("to_xarray needs xarray: pip install 'amb_fast[xarray]'") from error
+        data, coords, attrs = self._dataset_parts()
+        return xr.Dataset(data, coords=coords, attrs=attrs)
+
+    def _dataset_parts(self) -> tuple[dict[str, tuple], dict[str, tuple], dict[str, Any]]:
+        """The dataset's data variables and coordinates as ``name: (dims, values, attrs)``, and its
+        attributes: the one description of it, for :meth:`to_xarray` and for the direct NetCDF writer."""
         if self.grid == "product":
             dims = list(self.axes)
-            coords: dict[str, Any] = {
-                name: (name, values, {"units": unit_of(name)}) for name, values in self.axes.items()
+            coords: dict[str, tuple] = {
+                name: ([name], values, {"units": unit_of(name)}) for name, values in self.axes.items()
             }
         else:
             dims = ["point"]
-            coords = {name: ("point", values, {"units": unit_of(name)}) for name, values in self.points.items()}
-        coords["freq"] = ("freq", self.freq, {"units": "Hz"})
-        coords["unexcited_freq"] = ("unexcited_freq", self.unexcited_freq, {"units": "Hz"})
+            coords = {name: (["point"], values, {"units": unit_of(name)}) for name, values in self.points.items()}
+        coords["freq"] = (["freq"], self.freq, {"units": "Hz"})
+        coords["unexcited_freq"] = (["unexcited_freq"], self.unexcited_freq, {"units": "Hz"})
         shape = self.shape
 
         def var(values: np.ndarray, units: str, lines: str = "freq") -> tuple:
@@ -141,13 +147,13 @@ class SweepResult:
             "k_std": var(self.k_std, "N/m"),
             "c_std": var(self.c_std, "N s/m"),
             "unexcited_displacement": var(self.unexcited_displacement, "m", "unexcited_freq"),
-            "status": (dims, self.status.reshape(shape)),
-            "settle_periods": (dims, self.settle_periods.reshape(shape)),
-            "seeds": (dims, self.seeds.reshape(shape)),
+            "status": (dims, self.status.reshape(shape), {}),
+            "settle_periods": (dims, self.settle_periods.reshape(shape), {}),
+            "seeds": (dims, self.seeds.reshape(shape), {}),
         }
         attrs = {"grid": self.grid, "periods": self.periods, "blocks": self.blocks, "meta": json.dumps(self.meta),
                  "axes": json.dumps(list(self.axes))}  # fmt: skip
-        return xr.Dataset(data, coords=coords, attrs=attrs)
+        return data, coords, attrs
 
     def to_dataframe(self):  # noqa: ANN201 - pandas is optional
         """A ``pandas.DataFrame``: one row per point and line (swapped gains, status, freq_Hz, estimates)."""

@@ -299,7 +299,7 @@ def write_sweep_netcdf(result: SweepResult, path: str | Path) -> Path:
     distributed and pint (~0.6 s: xarray probes for their array types). Grids other than ``"product"`` (or arrays
     of other kinds) go through xarray (``save_netcdf_with_xarray``).
     """
-    from .._sweep_result import save_netcdf_with_xarray, unit_of
+    from .._sweep_result import save_netcdf_with_xarray
 
     path = Path(path)
     if result.grid != "product":
@@ -310,37 +310,23 @@ def write_sweep_netcdf(result: SweepResult, path: str | Path) -> Path:
         import h5py
     except ImportError as error:
         raise ImportError("writing .nc needs h5netcdf and h5py: pip install 'amb_fast[xarray]'") from error
-    dims = tuple(result.axes)
-    shape = result.shape
-
-    def grid(values: np.ndarray, units: str, lines: str = "freq") -> tuple[tuple[str, ...], np.ndarray, dict]:
-        return (*dims, lines), values.reshape(*shape, values.shape[-1]), {"units": units}
-
-    # SweepResult.to_xarray's variables, in the order its .nc file gets them (H split as in SweepResult.save)
+    data, coord_vars, dataset_attrs = result._dataset_parts()
+    # In the order xarray's file gets them: the data variables, the coordinates, then H split as
+    # SweepResult.save splits it (status as strings).
+    H_dims, H, H_attrs = data.pop("H")
+    dims_, status, status_attrs = data["status"]
+    data["status"] = (dims_, np.asarray(status).astype(str), status_attrs)
     variables: dict[str, tuple[tuple[str, ...], np.ndarray, dict]] = {
-        "k": grid(result.k, "N/m"),
-        "c": grid(result.c, "N s/m"),
-        "k_smooth": grid(result.k_smooth, "N/m"),
-        "c_smooth": grid(result.c_smooth, "N s/m"),
-        "k_std": grid(result.k_std, "N/m"),
-        "c_std": grid(result.c_std, "N s/m"),
-        "unexcited_displacement": grid(result.unexcited_displacement, "m", "unexcited_freq"),
-        "status": (dims, np.asarray(result.status).astype(str).reshape(shape), {}),
-        "settle_periods": (dims, np.asarray(result.settle_periods).reshape(shape), {}),
-        "seeds": (dims, np.asarray(result.seeds).reshape(shape), {}),
-        **{name: ((name,), np.asarray(values), {"units": unit_of(name)}) for name, values in result.axes.items()},
-        "freq": (("freq",), np.asarray(result.freq), {"units": "Hz"}),
-        "unexcited_freq": (("unexcited_freq",), np.asarray(result.unexcited_freq), {"units": "Hz"}),
-        "H_real": grid(result.H.real, "N/m"),
-        "H_imag": grid(result.H.imag, "N/m"),
+        name: (tuple(vdims), np.asarray(values), vattrs)
+        for name, (vdims, values, vattrs) in {**data, **coord_vars}.items()
     }
+    variables["H_real"] = (tuple(H_dims), H.real, H_attrs)
+    variables["H_imag"] = (tuple(H_dims), H.imag, H_attrs)
     if any(values.dtype.kind not in "fiuU" for _, values, _ in variables.values()):
         save_netcdf_with_xarray(result, path)  # what xarray would encode (booleans, complex, dates ...)
         return path
-    coords = {*dims, "freq", "unexcited_freq"}
-    attrs: dict[str, Any] = {"grid": result.grid, "periods": result.periods, "blocks": result.blocks,
-                             "meta": json.dumps(result.meta), "axes": json.dumps(list(result.axes)),
-                             "amb_fast_version": version()}  # fmt: skip
+    coords = set(coord_vars)
+    attrs: dict[str, Any] = {**dataset_attrs, "amb_fast_version": version()}
     attrs["sha256"] = _variables_digest({name: values for name, (_, values, _) in variables.items()}, attrs)
     require_space(path, sum(values.nbytes for _, values, _ in variables.values()))
     with atomic_path(path) as target:
