@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <mutex>
+#include <numeric>
 #include <stdexcept>
 
 #include "amb_fast/errors.hpp"
@@ -318,19 +319,19 @@ void steady_lines(const MimoModel& model, const double* const* period_force, Eig
     const Eigen::Index p = model.forces(), q = model.probes();
     const auto B = static_cast<Eigen::Index>(bins.size());
     std::vector<MimoPart> parts = independent_parts(model);
-    const bool whole = parts.size() == 1 || std::any_of(parts.begin(), parts.end(), [](const MimoPart& part) {
-                           return part.forces.empty() || part.probes.empty();
-                       });
-    if (whole) parts = {MimoPart{{}, {}, {}}};
+    if (std::any_of(parts.begin(), parts.end(), [](const MimoPart& part) { return part.forces.empty() || part.probes.empty(); })) {
+        const auto all = [](Eigen::Index count) {  // a part no force drives or no probe sees: drawn whole
+            std::vector<Eigen::Index> ids(static_cast<std::size_t>(count));
+            std::iota(ids.begin(), ids.end(), Eigen::Index{0});
+            return ids;
+        };
+        parts = {MimoPart{all(model.states()), all(p), all(q)}};
+    }
     for (std::size_t t = 0; t < parts.size(); ++t) {
-        const MimoPart& part = parts[t];
-        std::vector<Eigen::Index> forces = part.forces, probes = part.probes;
-        if (whole) {
-            for (Eigen::Index c = 0; c < p; ++c) forces.push_back(c);
-            for (Eigen::Index j = 0; j < q; ++j) probes.push_back(j);
-        }
+        const std::vector<Eigen::Index>& forces = parts[t].forces;
+        const std::vector<Eigen::Index>& probes = parts[t].probes;
         const auto pp = static_cast<Eigen::Index>(forces.size()), qq = static_cast<Eigen::Index>(probes.size());
-        SteadyLines draw(whole ? model : part.model(model), L, bins, {probes, forces, static_cast<Eigen::Index>(t)});
+        SteadyLines draw(parts.size() == 1 ? model : parts[t].model(model), L, bins, {probes, forces, static_cast<Eigen::Index>(t)});
         std::vector<double> force(static_cast<std::size_t>(L * pp));
         std::vector<cd> f(static_cast<std::size_t>(B * pp)), y(static_cast<std::size_t>(B * qq));
         for (Eigen::Index l = 0; l < K; ++l) {
