@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <atomic>
 #include <exception>
 #include <limits>
 #include <optional>
@@ -101,8 +102,7 @@ void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* poi
 
 void run_points(const Eigen::VectorXd& period_force, const SweepPoint* points, Eigen::Index count, Eigen::Index periods,
                 const LinePlan& plan, int median_window, bool steady_start, SweepEstimates& out,
-                Eigen::Index first_row) {
-    std::optional<Workspace> work;  // for the loops run side by side, made when the first group comes
+                Eigen::Index first_row, std::optional<Workspace>& work) {  // work: made when the first group comes
     Eigen::Index start = 0;
     while (start < count) {
         const SweepPoint& head = points[start];
@@ -133,26 +133,36 @@ void run_points(const Eigen::VectorXd& period_force, const SweepPoint* points, E
     }
 }
 
-// Runs work(begin, end) on contiguous shares of [0, count), one per worker (<= 0: one per core): the
-// calling thread takes the first (it is the one that can see Ctrl-C), a thread each the others; the
-// first error is rethrown once all have stopped. Shares are fixed by count and workers alone.
-template <class Work>
-void in_shares(Eigen::Index count, int workers, Work&& work) {
+// Runs [0, count) in blocks of `grain` that the workers (<= 0: one per core) claim in turn: a worker the
+// shared machine slows takes fewer blocks, so the threads end together (fixed halves wait for the slower).
+// Each worker calls make_worker() once for its own state and then the returned work(begin, end) per block.
+// The calling thread is a worker (the one that can see Ctrl-C), a thread each the others. A block's
+// numbers do not depend on which worker runs it. After an error no more blocks are claimed; the first
+// error is rethrown once all have stopped.
+template <class MakeWorker>
+void in_blocks(Eigen::Index count, Eigen::Index grain, int workers, MakeWorker&& make_worker) {
     if (workers <= 0) workers = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-    workers = static_cast<int>(std::min<Eigen::Index>(workers, std::max<Eigen::Index>(count, 1)));
+    const Eigen::Index blocks = std::max<Eigen::Index>((count + grain - 1) / grain, 1);
+    workers = static_cast<int>(std::min<Eigen::Index>(workers, blocks));
     const InterruptCheck* check = interrupt_check();
     std::vector<std::exception_ptr> errors(static_cast<std::size_t>(workers));
-    auto share = [&](int w) {
+    std::atomic<Eigen::Index> next{0};
+    auto worker = [&](int w) {
         const ScopedInterruptCheck installed(check);
         try {
-            work(count * w / workers, count * (w + 1) / workers);
+            auto work = make_worker();
+            for (Eigen::Index begin; (begin = next.fetch_add(grain)) < count;) {
+                poll_interrupt();
+                work(begin, std::min(begin + grain, count));
+            }
         } catch (...) {
             errors[static_cast<std::size_t>(w)] = std::current_exception();
+            next.store(count);  // the others stop at their next claim
         }
     };
     std::vector<std::thread> threads;
-    for (int w = 1; w < workers; ++w) threads.emplace_back(share, w);
-    share(0);
+    for (int w = 1; w < workers; ++w) threads.emplace_back(worker, w);
+    worker(0);
     for (auto& t : threads) t.join();
     for (auto& e : errors)
         if (e) std::rethrow_exception(e);
@@ -205,44 +215,50 @@ SweepEstimates run_sweep(const Eigen::Ref<const Eigen::VectorXd>& period_force, 
     out.blocks = periods / plan.periods_per_block;
 
     const Eigen::VectorXd force = period_force;
-    // Contiguous shares, so each point's numbers do not depend on how many workers there are.
     out.radius.setConstant(n, nan);
-    in_shares(n, workers, [&](Eigen::Index begin, Eigen::Index end) {
-        if (!loops.stack) {
-            run_points(force, points.data() + begin, end - begin, periods, plan, median_window, steady_start, out, begin);
-            return;
-        }
-        // Stability first (in parallel, as the points run), then each run of consecutive stable points.
-        Eigen::EigenSolver<Eigen::MatrixXd> solver(loops.m);
-        std::vector<std::complex<double>> values(static_cast<std::size_t>(loops.m));
-        for (Eigen::Index k = begin; k < end; ++k) {
-            eigenvalues_of(loops.stack + k * loops.m * loops.m, loops.m, solver, values.data());
-            double radius = 0.0;
-            for (const auto& v : values) radius = std::max(radius, std::abs(v));
-            out.radius[k] = radius;
-            if (!(radius < 1.0)) out.status[k] = static_cast<int>(PointStatus::unstable);
-        }
-        for (Eigen::Index k = begin; k < end;) {
-            if (out.status[k] == static_cast<int>(PointStatus::unstable)) {
-                ++k;
-                continue;
+    // Blocks of one point where the points are drawn one at a time, of a lane group where the loops run
+    // side by side (a point's numbers are the same in any group: run_experiment's).
+    const bool in_lanes = std::any_of(points.begin(), points.end(), [&](const SweepPoint& p) {
+        return p.rig.force_law == ForceLaw::linear && !draws_spectra(p.rig, steady_start);
+    });
+    in_blocks(n, in_lanes ? lanes_available() : 1, workers, [&] {
+        return [&, work = std::optional<Workspace>(), solver = Eigen::EigenSolver<Eigen::MatrixXd>(loops.m),
+                values = std::vector<std::complex<double>>(static_cast<std::size_t>(loops.m))](
+                   Eigen::Index begin, Eigen::Index end) mutable {
+            if (!loops.stack) {
+                run_points(force, points.data() + begin, end - begin, periods, plan, median_window, steady_start, out,
+                           begin, work);
+                return;
             }
-            Eigen::Index stop = k;
-            while (stop < end && out.status[stop] != static_cast<int>(PointStatus::unstable)) ++stop;
-            run_points(force, points.data() + k, stop - k, periods, plan, median_window, steady_start, out, k);
-            k = stop;
-        }
+            // Stability first, then each run of consecutive stable points.
+            for (Eigen::Index k = begin; k < end; ++k) {
+                eigenvalues_of(loops.stack + k * loops.m * loops.m, loops.m, solver, values.data());
+                double radius = 0.0;
+                for (const auto& v : values) radius = std::max(radius, std::abs(v));
+                out.radius[k] = radius;
+                if (!(radius < 1.0)) out.status[k] = static_cast<int>(PointStatus::unstable);
+            }
+            for (Eigen::Index k = begin; k < end;) {
+                if (out.status[k] == static_cast<int>(PointStatus::unstable)) {
+                    ++k;
+                    continue;
+                }
+                Eigen::Index stop = k;
+                while (stop < end && out.status[stop] != static_cast<int>(PointStatus::unstable)) ++stop;
+                run_points(force, points.data() + k, stop - k, periods, plan, median_window, steady_start, out, k,
+                           work);
+                k = stop;
+            }
+        };
     });
     return out;
 }
 
 void eigenvalues(const double* stack, Eigen::Index count, Eigen::Index m, std::complex<double>* values, int workers) {
-    in_shares(count, workers, [&](Eigen::Index begin, Eigen::Index end) {
-        Eigen::EigenSolver<Eigen::MatrixXd> solver(m);
-        for (Eigen::Index k = begin; k < end; ++k) {
-            if (k % 64 == 0) poll_interrupt();
-            eigenvalues_of(stack + k * m * m, m, solver, values + k * m);
-        }
+    in_blocks(count, 64, workers, [&] {
+        return [&, solver = Eigen::EigenSolver<Eigen::MatrixXd>(m)](Eigen::Index begin, Eigen::Index end) mutable {
+            for (Eigen::Index k = begin; k < end; ++k) eigenvalues_of(stack + k * m * m, m, solver, values + k * m);
+        };
     });
 }
 
