@@ -100,7 +100,7 @@ def main() -> None:
         np.median(core_ratios)
     )
     # And what two threads give on pure arithmetic with nothing shared at that moment (the eigenvalues of
-    # 4,000 random 7x7 matrices, split in halves): the ceiling of any scaling measured beside it.
+    # 4,000 random 7x7 matrices, claimed 64 at a time by the threads): the ceiling of any scaling measured beside it.
     stack = np.random.default_rng(0).random((4000, 7, 7))
     ceiling = []
     for _ in range(2 * repeats + 1):
