@@ -126,6 +126,14 @@ def discrete_plant(rig: Rig, fs: float) -> tuple[np.ndarray, np.ndarray, list[st
     return Phi2, Gamma2, states + [f"dead{j + 1}" for j in range(line)]
 
 
+def sensor_row(states: list[str]) -> np.ndarray:
+    """(1, states): the row that reads the sensor output from the plant's state (``ys``, or ``y`` when the
+    sensor has no lag)."""
+    row = np.zeros((1, len(states)))
+    row[0, states.index("ys") if "ys" in states else 0] = 1.0
+    return row
+
+
 def core_controller(controller: AnyController) -> Any:
     """The core's copy of a controller (``_core.Controller``), made once per distinct value."""
     if isinstance(controller, PID):
@@ -173,16 +181,16 @@ def closed_loop(rig: Rig, controller: AnyController) -> tuple[np.ndarray, np.nda
     Phi, Gamma, states = discrete_plant(rig, controller.fs)
     Ac, Bc, Cc, Dc = controller_matrices(controller)
     n, m = len(states), Ac.shape[0]
-    sensor = np.zeros((1, n))
-    sensor[0, states.index("ys") if "ys" in states else 0] = 1.0
+    sensor = sensor_row(states)
     gu, gf = Gamma[:, 1:2], Gamma[:, 0:1]
     A = np.block([[Phi + gu @ Dc @ sensor, gu @ Cc], [Bc @ sensor, Ac]])
     B = np.vstack([gf, np.zeros((m, 1))])
     command = np.hstack([Dc @ sensor, Cc])
+    samples = split_dead_time(rig.dead_time, controller.fs)[0]
     if "i" in states:
         current = np.eye(n + m)[states.index("i")][None, :]
-    elif "dead1" in states and split_dead_time(rig.dead_time, controller.fs)[0] > 0:  # the delayed command
-        current = np.eye(n + m)[states.index(f"dead{split_dead_time(rig.dead_time, controller.fs)[0]}")][None, :]
+    elif samples > 0:  # the delayed command (dead1 .. dead<samples> are states then)
+        current = np.eye(n + m)[states.index(f"dead{samples}")][None, :]
     else:
         current = command
     C = np.vstack([np.hstack([sensor, np.zeros((1, m))]), current])

@@ -19,6 +19,7 @@ from ._linear_loop import (
     controller_matrices,
     discrete_plant,
     is_controller,
+    sensor_row,
 )
 from ._linear_poles import _gain_arrays, closed_loop_poles
 from ._params import PID, Rig
@@ -88,19 +89,22 @@ def transducer_response(rig: Rig, fs: float, z: np.ndarray) -> np.ndarray:
 def _plant_responses(rig: Rig, fs: float, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Sampled plant responses from force and from current command to the sensor, at ``f`` (Hz)."""
     Phi, Gamma, states = discrete_plant(rig, fs)
-    sensor = np.zeros((1, len(states)))
-    sensor[0, states.index("ys") if "ys" in states else 0] = 1.0
-    response = _response(Phi, Gamma, sensor, np.exp(2j * np.pi * f / fs))[0]
+    response = _response(Phi, Gamma, sensor_row(states), np.exp(2j * np.pi * f / fs))[0]
     return response[0], response[1]
 
 
 def _controller_terms(pid: PID, f: np.ndarray) -> np.ndarray:
     """The digital G(z) z^-d is kp A(z) + ki B(z) + kd C(z): rows A, B, C at ``f`` (Hz)."""
+    zi = np.exp(-2j * np.pi * f * (1.0 / pid.fs))
+    return np.array([_digital_pid(pid, zi, *unit) for unit in np.eye(3)])
+
+
+def _digital_pid(pid: PID, zi: np.ndarray, kp: float, ki: float, kd: float) -> np.ndarray:
+    """The digital PID's G(z) z^-d at ``zi`` = z^-1 with gains ``kp``, ``ki``, ``kd`` (the rest from ``pid``)."""
     T = 1.0 / pid.fs
-    zi = np.exp(-2j * np.pi * f * T)
     a = np.exp(-2 * np.pi * pid.derivative_cutoff * T) if pid.derivative_cutoff is not None else 0.0
-    delay = zi**pid.delay
-    return np.array([np.ones_like(zi), T / (1 - zi), (1 - a) * (1 - zi) / (T * (1 - a * zi))]) * delay
+    G = kp + ki * T / (1 - zi) + kd * (1 - a) * (1 - zi) / (T * (1 - a * zi))
+    return G * zi**pid.delay
 
 
 @dataclass(frozen=True)
@@ -139,11 +143,9 @@ def sensitivity(rig: Rig, pid: AnyController, freq: ArrayLike) -> np.ndarray:
     rig_and_controller(rig, pid, "sensitivity")
     f = _frequencies(freq, pid.fs)
     Phi, Gamma, states = discrete_plant(rig, pid.fs)
-    sensor = np.zeros((1, len(states)))
-    sensor[0, states.index("ys") if "ys" in states else 0] = 1.0
     Ac, Bc, Cc, Dc = controller_matrices(pid)
     z = np.exp(2j * np.pi * f.ravel() / pid.fs)
-    plant = _response(Phi, Gamma[:, 1:2], sensor, z)[0, 0]  # i_cmd -> ys (negative gain: -Kiy)
+    plant = _response(Phi, Gamma[:, 1:2], sensor_row(states), z)[0, 0]  # i_cmd -> ys (negative gain: -Kiy)
     control = Dc[0, 0] + (_response(Ac, Bc, Cc, z)[0, 0] if Ac.size else 0.0)
     return (1.0 / (1.0 - plant * control)).reshape(f.shape)
 
@@ -177,11 +179,7 @@ def controller_response(controller: DesignController, freq: np.ndarray, *, discr
     if isinstance(controller, PID):
         pid = controller
         if discrete:
-            T = 1.0 / pid.fs
-            zi = np.exp(-s * T)  # z^-1
-            a = np.exp(-2 * np.pi * pid.derivative_cutoff * T) if pid.derivative_cutoff is not None else 0.0
-            G = pid.kp + pid.ki * T / (1 - zi) + pid.kd * (1 - a) * (1 - zi) / (T * (1 - a * zi))
-            return G * zi**pid.delay
+            return _digital_pid(pid, np.exp(-s * (1.0 / pid.fs)), pid.kp, pid.ki, pid.kd)
         derivative = s if pid.derivative_cutoff is None else s / (1 + s / (2 * np.pi * pid.derivative_cutoff))
         return pid.kp + pid.ki / s + pid.kd * derivative
     require(not discrete, "discrete", discrete, "False unless the controller is a PID or a Controller")

@@ -31,7 +31,6 @@ FITTABLE: dict[str, tuple[str, str]] = {
 }
 # Smallest scale of the linear parameters that may start at 0.
 _LINEAR_SCALE = {"kyy": 1.0, "mass_loading": 0.01, "dead_time": 1e-4}
-_OPTIONAL = ("amp_bandwidth", "eddy_bandwidth", "sensor_bandwidth", "force_coupling_tau")
 
 
 @dataclass(frozen=True)

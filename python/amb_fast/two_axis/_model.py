@@ -16,7 +16,7 @@ from typing import Any, Union, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.linalg import block_diag, expm
+from scipy.linalg import block_diag
 
 from .._errors import UnstableLoopError
 from .._linear import (
@@ -31,6 +31,7 @@ from .._linear import (
     split_dead_time,
     transducer_response,
 )
+from .._linear_loop import _zoh
 from .._validate import require
 from ._rig import TwoAxisRig
 
@@ -141,12 +142,6 @@ def sensor_rows(rig: TwoAxisRig, states: list[str]) -> np.ndarray:
         else:
             S[a, pos] = rig.rotation.T[a]
     return S
-
-
-def _zoh(A: np.ndarray, B: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
-    n, m = A.shape[0], B.shape[1]
-    E = expm(np.block([[A, B], [np.zeros((m, n + m))]]) * h)
-    return E[:n, :n], E[:n, n:]
 
 
 def discrete_plant2(rig: TwoAxisRig, fs: float) -> tuple[np.ndarray, np.ndarray, list[str]]:

@@ -22,6 +22,7 @@ from .._params import PID, Rig
 from .._sweep import _grid, point_seeds
 from .._validate import require, seed_value
 from ..io._atomic import atomic_write
+from ..plots import _tight_layout
 from ._experiment import Estimate2, run_experiment
 from ._model import ControllerMatrix, ControllerSpec, controller_matrix, effective_coefficients, stability_margin
 from ._rig import TwoAxisRig
@@ -193,7 +194,7 @@ def plot_coefficients2(estimate: Estimate2, *, smoothed: bool = False, effective
 
     k = estimate.k_smooth if smoothed else estimate.k
     c = estimate.c_smooth if smoothed else estimate.c
-    fig, axes = plt.subplots(2, 4, figsize=(14, 6), sharex=True, layout="constrained")
+    fig, axes = plt.subplots(2, 4, figsize=(14, 6), sharex=True)
     for col, (i, j) in enumerate(((0, 0), (0, 1), (1, 0), (1, 1))):
         label = "xy"[i] + "xy"[j]
         for row, (values, std, unit, name) in enumerate(((k, estimate.k_std, "N/m", "k"),
@@ -209,6 +210,7 @@ def plot_coefficients2(estimate: Estimate2, *, smoothed: bool = False, effective
             if row == 1:
                 ax.set_xlabel("frequency (Hz)")
     axes[0, 0].legend()
+    _tight_layout(fig)
     return fig
 
 
