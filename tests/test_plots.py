@@ -47,3 +47,16 @@ def test_family_figures_get_a_zoomed_inset() -> None:
     inset = zoomed.axes[0].child_axes[0]
     assert inset.get_title() == "30-50 Hz" and inset.get_xscale() == "linear"
     assert zoomed.axes[1].get_yscale() == "linear"
+
+
+def test_without_matplotlib_every_figure_says_which_extra_to_install(estimate, monkeypatch) -> None:
+    import sys
+
+    import amb_fast.two_axis as ta
+
+    est2 = ta.run_experiment(ta.TwoAxisRig.paper(), af.PID.paper(), af.schroeder_multisine(f0=20.0, f_max=100.0),
+                             periods=2, seed=1)  # fmt: skip
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # as if not installed: importing it raises ImportError
+    for draw in (lambda: af.plot_estimate(estimate), lambda: af.plot_coefficients2(est2)):
+        with pytest.raises(ImportError, match=r"pip install 'amb_fast\[plot\]'"):
+            draw()

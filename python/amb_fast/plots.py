@@ -7,7 +7,7 @@ drawn as shaded bands of +-2 s.e. under the curves, never as bars over them.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -21,7 +21,8 @@ if TYPE_CHECKING:
 LABELS = {"kp": ("K_p", "A/m"), "ki": ("K_i", "A/(m s)"), "kd": ("K_d", "A s/m")}
 
 
-def _figure(rows: int, height: float = 3.0) -> tuple[Figure, np.ndarray]:
+def _pyplot() -> Any:
+    """matplotlib.pyplot, on the Agg backend unless one was chosen; a clear error without matplotlib."""
     try:
         import matplotlib
 
@@ -29,7 +30,11 @@ def _figure(rows: int, height: float = 3.0) -> tuple[Figure, np.ndarray]:
         import matplotlib.pyplot as plt
     except ImportError as error:
         raise ImportError("figures need matplotlib: pip install 'amb_fast[plot]'") from error
-    fig, axes = plt.subplots(rows, 1, figsize=(7.0, height * rows), sharex=True, squeeze=False)
+    return plt
+
+
+def _figure(rows: int, height: float = 3.0) -> tuple[Figure, np.ndarray]:
+    fig, axes = _pyplot().subplots(rows, 1, figsize=(7.0, height * rows), sharex=True, squeeze=False)
     return fig, axes[:, 0]
 
 

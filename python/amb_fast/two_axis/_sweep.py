@@ -22,7 +22,7 @@ from .._params import PID, Rig
 from .._sweep import _grid, point_seeds
 from .._validate import require, seed_value
 from ..io._atomic import atomic_write
-from ..plots import _tight_layout
+from ..plots import _pyplot, _tight_layout
 from ._experiment import Estimate2, run_experiment
 from ._model import ControllerMatrix, ControllerSpec, controller_matrix, effective_coefficients, stability_margin
 from ._rig import TwoAxisRig
@@ -190,11 +190,9 @@ def plot_coefficients2(estimate: Estimate2, *, smoothed: bool = False, effective
     >>> [ax.get_title() for ax in fig.axes[4:]]
     ['cxx (N s/m)', 'cxy (N s/m)', 'cyx (N s/m)', 'cyy (N s/m)']
     """
-    import matplotlib.pyplot as plt
-
     k = estimate.k_smooth if smoothed else estimate.k
     c = estimate.c_smooth if smoothed else estimate.c
-    fig, axes = plt.subplots(2, 4, figsize=(14, 6), sharex=True)
+    fig, axes = _pyplot().subplots(2, 4, figsize=(14, 6), sharex=True)
     for col, (i, j) in enumerate(((0, 0), (0, 1), (1, 0), (1, 1))):
         label = "xy"[i] + "xy"[j]
         for row, (values, std, unit, name) in enumerate(((k, estimate.k_std, "N/m", "k"),
