@@ -57,6 +57,32 @@ def test_the_package_and_the_command_load_scipy_signal_optimize_stats_only_when_
     assert out[1] == "['scipy.optimize', 'scipy.signal']", out
 
 
+XARRAY_AND_WHAT_IT_PROBES = ("xarray", "dask", "distributed", "pint")
+WRITING_NETCDF = {
+    "Estimate.save": "import amb_fast as af; af.run_experiment(af.Rig(), af.PID.paper(), af.schroeder_multisine("
+    "f_max=20.0), periods=2, seed=4).save(path)",
+    "amb-fast run --save": "import amb_fast.cli; assert amb_fast.cli.main(['run', '--periods', '2', '--seed', '4', "
+    "'--save', path]) == 0",
+    "amb-fast sweep --out": "import amb_fast.cli; assert amb_fast.cli.main(['sweep', '--kp', '2000,2400', "
+    "'--periods', '2', '--seed', '4', '--no-progress', '--out', path]) == 0",
+}
+
+
+@pytest.mark.parametrize("how", WRITING_NETCDF)
+def test_netcdf_files_are_written_without_importing_xarray(tmp_path, how) -> None:
+    """An estimate's and a product grid's ``.nc`` files are written with h5netcdf alone: importing xarray (and the
+    dask, distributed and pint it probes for) took ~1 s of ``amb-fast run --save x.nc``."""
+    pytest.importorskip("h5netcdf")
+    pytest.importorskip("xarray")  # to read the file back
+    path = tmp_path / "out.nc"
+    code = (f"import sys; path = sys.argv[1]; {WRITING_NETCDF[how]}; "
+            f"print([m for m in {XARRAY_AND_WHAT_IT_PROBES!r} if m in sys.modules])")  # fmt: skip
+    done = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True, check=True)
+    assert done.stdout.strip().splitlines()[-1] == "[]", done.stdout
+    loaded = af.load_sweep(path) if "sweep" in how else af.load_estimate(path)
+    assert loaded.meta["seed"] == 4
+
+
 def test_the_command_line_as_a_separate_process(tmp_path) -> None:
     done = subprocess.run([sys.executable, "-m", "amb_fast", "sweep", "--kp", "2000", "--out", "s.xlsx"], cwd=tmp_path,
                           capture_output=True, text=True, timeout=120)  # fmt: skip

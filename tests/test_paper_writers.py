@@ -10,7 +10,7 @@ import pytest
 
 import amb_fast as af
 from amb_fast._sweep_result import save_netcdf_with_xarray
-from amb_fast.io._results import read_netcdf, write_sweep_netcdf
+from amb_fast.io._netcdf import read_netcdf, write_sweep_netcdf
 
 FIELDS = ("freq", "H", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std", "status", "settle_periods", "seeds",
           "unexcited_freq", "unexcited_displacement")  # fmt: skip
@@ -93,11 +93,20 @@ def test_a_sweep_written_without_xarray_is_refused_when_damaged(tmp_path, sweeps
 
 
 def test_figures_are_drawn_once_by_savefig(monkeypatch) -> None:
-    """tight_layout used to leave a placeholder layout engine behind, which made savefig draw every figure twice."""
+    """tight_layout used to leave a placeholder layout engine behind, which made savefig draw every figure twice;
+    the two-axis figure's constrained layout did the same."""
     pytest.importorskip("matplotlib")
+    from dataclasses import replace
+
     from matplotlib.figure import Figure
 
+    import amb_fast.two_axis as ta
+
     estimate = af.run_experiment(af.Rig(), af.PID.paper(), af.schroeder_multisine(f_max=20.0), periods=2)
+    coupled = replace(ta.TwoAxisRig.paper(), kxy=1e4, kyx=-1e4)
+    sphs = af.schroeder_multisine(f0=20.0, f_max=100.0)
+    estimate2 = ta.run_experiment(coupled, af.PID.paper(), sphs, periods=2, seed=1)
+    effective2 = ta.effective_coefficients(coupled, af.PID.paper(), estimate2.freq)
     draws = {"n": 0}
     draw = Figure.draw
 
@@ -106,7 +115,8 @@ def test_figures_are_drawn_once_by_savefig(monkeypatch) -> None:
         return draw(self, renderer)
 
     monkeypatch.setattr(Figure, "draw", counted)
-    for fig in (af.plot_actual(estimate), af.plot_estimate(estimate)):
+    for fig in (af.plot_actual(estimate), af.plot_estimate(estimate),
+                af.plot_coefficients2(estimate2, effective=effective2)):  # fmt: skip
         assert fig.get_layout_engine() is None
         left = fig.subplotpars.left
         draws["n"] = 0

@@ -165,7 +165,7 @@ class SweepResult:
         """Write atomically to ``.nc`` (NetCDF through h5netcdf; H as real and imaginary parts;
         fletcher32 and a SHA-256 checked by :func:`load_sweep`) or ``.npz`` (zip CRC-32 per array)."""
         from .io import atomic_path
-        from .io._results import write_sweep_netcdf
+        from .io._netcdf import write_sweep_netcdf
 
         path = Path(path)
         if path.suffix == ".nc":
@@ -182,7 +182,7 @@ class SweepResult:
 
 def save_netcdf_with_xarray(result: SweepResult, path: Path) -> None:
     """The sweep's ``.nc`` file as xarray writes :meth:`SweepResult.to_xarray`'s Dataset: for grids the
-    direct writer (``io._results.write_sweep_netcdf``) does not lay out, and its reference in the tests."""
+    direct writer (``io._netcdf.write_sweep_netcdf``) does not lay out, and its reference in the tests."""
     from .io import write_netcdf
 
     ds = result.to_xarray()

@@ -6,8 +6,11 @@
   v4-v7 (scipy) and v7.3 (HDF5, h5py), dSPACE ControlDesk/TRACE exports with several recordings
   (``_mat``); NI TDMS (npTDMS, ``_tdms``). What they share (``_channels``): channels by name or index,
   units scaled to SI or refused, fs from a time column, the choice among a file's recordings.
-- Writers (``_results``): estimates as CSV with a metadata header or NetCDF, xarray and pandas views,
-  SHA-256 checksums (and HDF5 fletcher32) checked on load.
+- Writers (``_results``): estimates as CSV with a metadata header, the estimate's dataset described once,
+  xarray and pandas views, SHA-256 checksums checked on load.
+- NetCDF (``_netcdf``): estimates and sweeps written with h5netcdf alone (the file xarray writes from their
+  ``to_xarray`` Dataset, without importing xarray), xarray's writer kept as the reference; the reader, which
+  checks the file's SHA-256, the dataset's and HDF5's fletcher32.
 - The atomic-write helper (``_atomic``): a temporary file in the same directory, fsync, ``os.replace``.
 """
 
@@ -15,8 +18,9 @@ from __future__ import annotations
 
 from ._atomic import atomic_path, atomic_text, atomic_write
 from ._channels import split_unit
+from ._netcdf import read_netcdf, write_netcdf
 from ._recording import Recording, load_recording, save_recording
-from ._results import load_estimate, read_netcdf, save_estimate, write_netcdf
+from ._results import load_estimate, save_estimate
 from ._text import sniff
 
 __all__ = [
