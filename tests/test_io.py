@@ -5,6 +5,7 @@ Every file is generated here; none is a fixture.
 
 from __future__ import annotations
 
+import os
 import tracemalloc
 from pathlib import Path
 
@@ -294,6 +295,26 @@ def test_a_failed_replace_leaves_the_old_estimate_and_a_netcdf_failure_too(tmp_p
         monkeypatch.undo()
         assert path.read_bytes() == before
         assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []
+
+
+@pytest.mark.skipif(os.name != "posix", reason="POSIX permissions")
+def test_written_files_get_ordinary_permissions_and_replaced_files_keep_theirs(tmp_path) -> None:
+    """mkstemp makes owner-only files (0600); what a user writes must be readable as any file they create."""
+    umask = os.umask(0o022)
+    try:
+        for name in ("new.csv", "new.nc", "new.txt"):
+            path = tmp_path / name
+            if name.endswith(".txt"):
+                _atomic.atomic_text(path, "x")
+            else:
+                af.run_experiment(af.Rig(), af.PID.paper(), af.schroeder_multisine(f_max=20.0), periods=2).save(path)
+            assert path.stat().st_mode & 0o777 == 0o644, name
+        path = tmp_path / "new.txt"
+        path.chmod(0o640)
+        _atomic.atomic_text(path, "y")
+        assert path.stat().st_mode & 0o777 == 0o640 and path.read_text() == "y"
+    finally:
+        os.umask(umask)
 
 
 def test_a_missing_directory_is_a_clear_error(tmp_path) -> None:

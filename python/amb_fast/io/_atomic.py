@@ -1,7 +1,8 @@
 """Atomic writes: a temporary file in the target's directory, flushed and fsynced, then ``os.replace``.
 
 A write that fails part-way (a full disk, an exception in the writer, an interrupt) leaves the old file
-as it was and no temporary file behind, and raises an ``OSError`` that names the path.
+as it was and no temporary file behind, and raises an ``OSError`` that names the path. The new file gets
+the old one's permissions, or a new file's (0666 less the umask): not mkstemp's owner-only 0600.
 """
 
 from __future__ import annotations
@@ -11,6 +12,16 @@ import os
 import tempfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
+
+
+def _permissions(path: Path) -> int:
+    """The mode ``path`` has, or a file created there with open() would get (0666 less the umask)."""
+    try:
+        return path.stat().st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0o022)  # read it the only portable way: set and restore at once
+        os.umask(umask)
+        return 0o666 & ~umask
 
 
 def _fsync_dir(directory: Path) -> None:
@@ -43,6 +54,7 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         yield temporary
         with open(temporary, "rb+") as handle:
             os.fsync(handle.fileno())
+        os.chmod(temporary, _permissions(path))
         os.replace(temporary, path)
         _fsync_dir(directory)
     except BaseException as error:
