@@ -112,7 +112,7 @@ public:
     void check_clearance(double y, Eigen::Index sample) const;
 
 private:
-    friend struct LoopState;  // loop.cpp: the state into and out of the kernel's registers
+    friend struct LoopState;  // loop_kernel.hpp: the state into and out of the kernel's registers
     static constexpr Eigen::Index chunk = 1024;  // noise is drawn a chunk at a time
 
     // force_noise: where the loop draws the force transducer's noise of these samples, or null.
