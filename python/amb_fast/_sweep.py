@@ -355,21 +355,21 @@ def sweep(
         count = min(8 * threads, max(1, -(-n // 32)))
         count = -(-count // threads) * threads
         size = -(-n // count)
-    chunks = [np.arange(i, min(i + size, n)) for i in range(0, n, size)]
+    chunks = [slice(i, min(i + size, n)) for i in range(0, n, size)]  # contiguous: views, not copies
     _, unexcited = _plan(excitation.harmonics, excitation.period_samples)
     results: dict[str, np.ndarray] = {}
 
-    def chunk(rows: np.ndarray, core_threads: int) -> tuple:  # the arguments of one chunk's _run_chunk
+    def chunk(rows: slice, core_threads: int) -> tuple:  # the arguments of one chunk's _run_chunk
         return (base_rig, base_controller, factory, excitation, {name: values[rows] for name, values in points.items()},
                 seeds[rows], periods, settle_periods, window, core_threads, start)  # fmt: skip
 
-    def collect(rows: np.ndarray, part: dict[str, np.ndarray]) -> None:
+    def collect(rows: slice, part: dict[str, np.ndarray]) -> None:
         for name, values in part.items():
             if name not in results:
                 results[name] = np.empty((n, *values.shape[1:]), dtype=values.dtype)
             results[name][rows] = values
         if bar is not None:
-            bar.update(rows.size)
+            bar.update(rows.stop - rows.start)
 
     try:
         if executor is None:
