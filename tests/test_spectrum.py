@@ -1,4 +1,4 @@
-"""The estimator's transform (LineTransform in cpp/src/spectrum.cpp) against numpy.fft.rfft: the
+"""The estimator's transform (LineTransform in cpp/src/line_transform.cpp) against numpy.fft.rfft: the
 vendored pocketfft and the direct sum, every kind of period length, the bins at 0 and Nyquist, and the
 cost model's choice."""
 
