@@ -13,12 +13,18 @@ CPU time of this process): both sides of a pair see the same machine, where medi
 Both calls are warmed up first, then the process rests for half a second: the first call of each
 builds and caches its model with numpy/scipy linear algebra, after which OpenBLAS's worker threads
 spin for a while, and their CPU time would be charged to whichever call is timed next.
+
+Sweeps (wall time): a 40-point sweep of a seal's circulatory cross stiffness (kxy = -kyx, 0-20 kN/m) on
+the paper rig, on 1 and 2 threads, against the loop over run_experiment that a user would write (and
+that the sweep was before), in interleaved pairs. Every repeat shifts the grid by a millinewton per
+metre, so each point's loop is built afresh as in a user's first sweep, not taken from the caches.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -77,6 +83,32 @@ def main() -> None:
         two()
         pairs.append((time.process_time() - middle) / (middle - start))
     ratios["two-axis / one-axis, interleaved pairs (cpu; median; target <= 2.5)"] = float(np.median(pairs))
+
+    shifts = iter(range(10**6))
+
+    def grid() -> np.ndarray:
+        return np.linspace(0.0, 2e4, 40) + 1e-3 * next(shifts)  # N/m; fresh points: no cached loops
+
+    def swept(workers: int) -> object:
+        kxy = grid()
+        return ta.sweep(two_rig, pid, sphs, grid="zip", kxy=kxy, kyx=-kxy, seed=1, workers=workers)
+
+    def looped() -> object:
+        return [ta.run_experiment(replace(two_rig, kxy=k, kyx=-k), pid, sphs, seed=1) for k in grid()]
+
+    swept(1), looped()
+    sweep_pairs: dict[str, list[float]] = {"loop": [], "one": [], "two": []}
+    for _ in range(max(3, repeats // 4)):
+        for name, run in (("loop", looped), ("one", lambda: swept(1)), ("two", lambda: swept(2))):
+            start = time.perf_counter()
+            run()
+            sweep_pairs[name].append(time.perf_counter() - start)
+    loop_t, one_t, two_t = (np.array(sweep_pairs[k]) for k in ("loop", "one", "two"))
+    measured["40-point two-axis sweep, 1 thread (wall, ms)"] = float(np.median(one_t))
+    measured["40-point two-axis sweep, 2 threads (wall, ms)"] = float(np.median(two_t))
+    measured["40 run_experiment calls in a loop (wall, ms)"] = float(np.median(loop_t))
+    ratios["two-axis sweep scaling 1 -> 2 threads, 40 points, interleaved"] = float(np.median(one_t / two_t))
+    ratios["loop of run_experiment / sweep on 2 threads, interleaved"] = float(np.median(loop_t / two_t))
     report(args.out, measured, ratios, "ms", 1e3)
 
 

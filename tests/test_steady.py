@@ -120,10 +120,12 @@ INTERRUPTED = [
     "af.simulate(af.Rig.paper(), af.PID.paper(), np.zeros(400_000_000))",
     "af.sweep(af.Rig.paper(), af.PID.paper(), ms, kp=np.linspace(2000, 3000, 64), start='rest',"
     " settle_periods=3000, progress=False)",
+    "af.two_axis.sweep(af.TwoAxisRig.paper(), af.PID.paper(), af.schroeder_multisine(f0=0.25, f_max=50.0),"
+    " kp=np.linspace(2000, 3000, 1000), start='rest')",
 ]
 
 
-@pytest.mark.parametrize("call", INTERRUPTED, ids=["run_experiment", "simulate", "sweep"])
+@pytest.mark.parametrize("call", INTERRUPTED, ids=["run_experiment", "simulate", "sweep", "two-axis sweep"])
 def test_ctrl_c_stops_a_long_core_call(call: str) -> None:
     """SIGINT during a call that would run for minutes ends it with KeyboardInterrupt (the time it takes
     is measured in bench/, not asserted here beyond 'long before the call would have finished')."""

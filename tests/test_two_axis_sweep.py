@@ -1,26 +1,60 @@
-"""Two-axis sweeps: a point that fails for another reason than instability ends the call and its threads."""
+"""Two-axis sweeps: every point equals run_experiment of that point bit for bit, on any number of threads
+and on an executor; a point that fails for another reason than instability ends the call."""
 
 from __future__ import annotations
 
-import threading
+from concurrent.futures import ThreadPoolExecutor
 
+import numpy as np
 import pytest
 
 import amb_fast as af
+import amb_fast.two_axis as ta
 from amb_fast.two_axis import _sweep
 
+FIELDS = ("k", "c", "k_std", "c_std", "receptance")
 
-def test_a_failing_point_raises_and_leaves_no_threads_behind(monkeypatch) -> None:
+
+@pytest.mark.parametrize("start", ["steady", "rest"])
+def test_every_point_equals_its_own_experiment_on_threads_and_executors(start) -> None:
+    coupled = ta.TwoAxisRig(x=af.Rig.paper(), y=af.Rig.paper(), kxy=2e3, kyx=-2e3)  # drawn whole, not by axis
+    sphs = af.schroeder_multisine(f0=20.0, f_max=200.0)
+    axes = dict(kxy=[0.0, 4e3], kp=[900.0, 2200.0, 2600.0])  # kp = 900 A/m is unstable
+    results = [ta.sweep(coupled, af.PID.paper(), sphs, periods=3, seed=5, start=start, workers=w, **axes)
+               for w in (1, 2)]  # fmt: skip
+    with ThreadPoolExecutor(2) as pool:
+        results.append(ta.sweep(coupled, af.PID.paper(), sphs, periods=3, seed=5, start=start, executor=pool, **axes))
+    first = results[0]
+    np.testing.assert_array_equal(first.stable, [False, True, True] * 2)
+    for i in range(first.stable.size):
+        point = {name: values[i] for name, values in first.params.items()}
+        if not first.stable[i]:
+            for result in results:
+                assert not result.stable[i] and all(np.isnan(getattr(result, name)[i]).all() for name in FIELDS)
+            continue
+        alone = ta.run_experiment(*ta.point_model2(coupled, af.PID.paper(), point), sphs, periods=3,
+                                  seed=int(first.seeds[i]), start=start)  # fmt: skip
+        for result in results:
+            for name in FIELDS:
+                np.testing.assert_array_equal(getattr(result, name)[i], getattr(alone, name), err_msg=f"{name} at {i}")
+
+
+def test_a_failing_point_raises(monkeypatch) -> None:
+    """On the executor's threads and in the core's call: an error that is not instability is not a NaN point."""
+    sphs = af.schroeder_multisine(f0=10.0, f_max=50.0)
+    real = _sweep._point_args
     calls = []
 
-    def failing(model, seed, **options):  # noqa: ANN001, ANN003, ANN202
-        calls.append(seed)
-        raise ValueError("disk full")
+    def failing(rig, *args):  # noqa: ANN001, ANN002, ANN202
+        calls.append(rig.kxy)
+        if rig.kxy == 2e3:
+            raise ValueError("disk full")
+        return real(rig, *args)
 
-    monkeypatch.setattr(_sweep, "_point", failing)
-    before = threading.active_count()
-    sphs = af.schroeder_multisine(f0=1.0, f_max=20.0)
+    monkeypatch.setattr(_sweep, "_point_args", failing)
+    monkeypatch.setattr(ta._experiment, "_point_args", failing)
     with pytest.raises(ValueError, match="disk full"):
-        _sweep.sweep(af.TwoAxisRig.paper(), af.PID.paper(), sphs, workers=2, kxy=[0.0, 1e3, 2e3, 3e3])
-    assert calls
-    assert threading.active_count() == before
+        ta.sweep(ta.TwoAxisRig.paper(), af.PID.paper(), sphs, periods=2, kxy=[0.0, 1e3, 2e3, 3e3])
+    with ThreadPoolExecutor(2) as pool, pytest.raises(ValueError, match="disk full"):
+        ta.sweep(ta.TwoAxisRig.paper(), af.PID.paper(), sphs, periods=2, executor=pool, kxy=[0.0, 1e3, 2e3, 3e3])
+    assert 2e3 in calls

@@ -1,10 +1,12 @@
 #include "amb_fast/estimate2x2.hpp"
 #include "amb_fast/mimo_lines.hpp"
+#include "amb_fast/mimo_sweep.hpp"
 #include "bindings.hpp"
 
 #include <pybind11/complex.h>
 #include <pybind11/numpy.h>
 
+#include <array>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -155,4 +157,50 @@ void bind_mimo(py::module_& m) {
         py::arg("force_lines"), py::arg("displacement_lines"),
         "The 2x2 estimate from per-period line spectra (periods, lines, channel, experiment): returns H = F Y^-1, its "
         "inverse, the period means F and Y (lines, 2, 2), and the variances of Re H and Im H (lines, 2, 2).");
+    m.def(
+        "mimo_line_sweep",
+        [](const std::vector<Eigen::MatrixXd>& M, const std::vector<Eigen::MatrixXd>& Bf,
+           const std::vector<Eigen::MatrixXd>& Bn, const std::vector<Eigen::MatrixXd>& C,
+           const std::vector<Eigen::MatrixXd>& Dn, const std::vector<Eigen::VectorXd>& transducer_pole,
+           const std::vector<Eigen::VectorXd>& sensor_noise, const std::vector<Eigen::VectorXd>& force_noise,
+           const InputArray& period_forces, const std::vector<Eigen::Index>& settle_periods, Eigen::Index periods,
+           const py::array_t<std::uint64_t, py::array::c_style | py::array::forcecast>& seeds, bool steady_start,
+           const std::vector<Eigen::Index>& bins, int workers) {
+            const std::size_t n = M.size();
+            for (const std::size_t size : {Bf.size(), Bn.size(), C.size(), Dn.size(), transducer_pole.size(),
+                                           sensor_noise.size(), force_noise.size(), settle_periods.size()})
+                if (size != n) throw std::invalid_argument("mimo_line_sweep: one model and settle_periods per point");
+            if (seeds.ndim() != 2 || static_cast<std::size_t>(seeds.shape(0)) != n || seeds.shape(1) != 2)
+                throw std::invalid_argument("seeds must have shape (points, 2): both experiments' seeds per point");
+            std::vector<MimoModel> models;
+            std::vector<std::array<std::uint64_t, 2>> pairs;
+            for (std::size_t k = 0; k < n; ++k) {
+                models.push_back(model_of(M[k], Bf[k], Bn[k], C[k], Dn[k], transducer_pole[k], sensor_noise[k],
+                                          force_noise[k]));
+                if (models.back().forces() != 2 || models.back().probes() != 2)
+                    throw std::invalid_argument("mimo_line_sweep: every model has two forces and two probes");
+                pairs.push_back({seeds.at(k, 0), seeds.at(k, 1)});
+            }
+            Eigen::Index L = 0;
+            const std::vector<const double*> forces =
+                experiment_forces(period_forces, 2, std::vector<std::uint64_t>(2), periods, L);
+            const auto points = static_cast<Eigen::Index>(n), B = static_cast<Eigen::Index>(bins.size());
+            const std::vector<py::ssize_t> shape{points, B, 2, 2};
+            py::array_t<std::complex<double>> H(shape), receptance(shape), force(shape), displacement(shape);
+            py::array_t<double> var_re(shape), var_im(shape);
+            const MimoSweepOutput out{H.mutable_data(),       receptance.mutable_data(), force.mutable_data(),
+                                      displacement.mutable_data(), var_re.mutable_data(),     var_im.mutable_data()};
+            interruptible([&] {
+                mimo_line_sweep(models, forces.data(), L, settle_periods, periods, pairs, steady_start, bins, workers,
+                                out);
+                return 0;
+            });
+            return py::make_tuple(H, receptance, force, displacement, var_re, var_im);
+        },
+        py::arg("M"), py::arg("Bf"), py::arg("Bn"), py::arg("C"), py::arg("Dn"), py::arg("transducer_pole"),
+        py::arg("sensor_noise"), py::arg("force_noise"), py::arg("period_forces"), py::arg("settle_periods"),
+        py::arg("periods"), py::arg("seeds"), py::arg("steady_start"), py::arg("bins"), py::arg("workers"),
+        "Two-axis sweep: per point (lists of the models' matrices, settle_periods, seeds (points, 2)), "
+        "mimo_line_experiments then estimate_2x2, on `workers` threads (<= 0: all cores), GIL released, Ctrl-C "
+        "stops it. Returns estimate_2x2's H, receptance, F, Y, var_re, var_im, each (points, lines, 2, 2).");
 }

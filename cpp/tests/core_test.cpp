@@ -2,6 +2,7 @@
 // against independent answers. The Python test suite is the full one; this driver exists so that
 // AddressSanitizer and UndefinedBehaviorSanitizer see the core without an interpreter around it.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <cstdio>
@@ -19,7 +20,9 @@
 #include "amb_fast/lanes.hpp"
 #include "amb_fast/loop.hpp"
 #include "amb_fast/random.hpp"
+#include "amb_fast/estimate2x2.hpp"
 #include "amb_fast/mimo_lines.hpp"
+#include "amb_fast/mimo_sweep.hpp"
 #include "amb_fast/spectrum.hpp"
 #include "amb_fast/steady.hpp"
 
@@ -575,6 +578,54 @@ int main() {
         const double lyapunov = relative(P - M * P * M.transpose() - Q), root = relative(R * R.transpose() - P);
         check(lyapunov < 1e-12 && root < 1e-12, "stationary covariance solves Lyapunov (" + std::to_string(lyapunov) +
                                                     "), its root squares to it (" + std::to_string(root) + ")");
+    }
+
+    {  // A two-axis sweep on two threads: every point's estimate equals its experiments and estimate alone.
+        const Eigen::Index L = 64, periods = 3;
+        const std::vector<Eigen::Index> bins{1, 2, 5};
+        const auto B = static_cast<Eigen::Index>(bins.size());
+        std::vector<MimoModel> models;
+        for (int g = 0; g < 3; ++g) {
+            MimoModel model;
+            model.M = (Eigen::MatrixXd(2, 2) << 0.9, 0.02 * g, 0.5, 0.7).finished();  // stable: |z| < 0.98
+            model.Bf = (Eigen::MatrixXd(2, 2) << 0.1, 0.02, 0.0, 0.3 + 0.1 * g).finished();
+            model.Bn = (Eigen::MatrixXd(2, 2) << 0.2, 0.0, 0.0, 0.1).finished();
+            model.C = Eigen::MatrixXd::Identity(2, 2);
+            model.Dn = Eigen::MatrixXd::Identity(2, 2);
+            model.transducer_pole = Eigen::Vector2d(0.0, 0.5);
+            model.sensor_noise = Eigen::Vector2d(1e-3, 2e-3);
+            model.force_noise = Eigen::Vector2d(1e-2, 0.0);
+            models.push_back(model);
+        }
+        std::vector<double> x(2 * L), y(2 * L);
+        for (Eigen::Index k = 0; k < L; ++k) {
+            const double s = std::sin(2 * 3.141592653589793 * static_cast<double>(k) / L) + std::cos(0.7 * k);
+            x[2 * k] = x[2 * k + 1] = y[2 * k] = s;
+            y[2 * k + 1] = -s;
+        }
+        const double* forces[2] = {x.data(), y.data()};
+        const std::vector<std::array<std::uint64_t, 2>> seeds{{{3, 4}}, {{5, 6}}, {{7, 8}}};
+        const std::vector<Eigen::Index> settle{0, 0, 0};
+        const std::size_t size = models.size() * static_cast<std::size_t>(B) * 4;
+        std::vector<std::complex<double>> H(size), R(size), F(size), Y(size);
+        std::vector<double> var_re(size), var_im(size);
+        mimo_line_sweep(models, forces, L, settle, periods, seeds, true, bins, 2,
+                        {H.data(), R.data(), F.data(), Y.data(), var_re.data(), var_im.data()});
+        bool same = true;
+        std::vector<std::complex<double>> fl(static_cast<std::size_t>(periods * B * 4)), dl(fl.size());
+        for (std::size_t g = 0; g < models.size(); ++g) {
+            mimo_line_experiments(models[g], forces, L, 0, periods, {seeds[g][0], seeds[g][1]}, true, bins, fl.data(),
+                                  dl.data());
+            const Estimate2x2 e = estimate_2x2(fl.data(), dl.data(), periods, B);
+            const std::size_t at = g * static_cast<std::size_t>(B) * 4;
+            same = same && std::equal(e.H.begin(), e.H.end(), H.begin() + at) &&
+                   std::equal(e.receptance.begin(), e.receptance.end(), R.begin() + at) &&
+                   std::equal(e.force.begin(), e.force.end(), F.begin() + at) &&
+                   std::equal(e.displacement.begin(), e.displacement.end(), Y.begin() + at) &&
+                   std::equal(e.var_re.begin(), e.var_re.end(), var_re.begin() + at) &&
+                   std::equal(e.var_im.begin(), e.var_im.end(), var_im.begin() + at) && std::isfinite(e.var_re[0]);
+        }
+        check(same, "two-axis sweep on two threads equals each point alone bit for bit");
     }
 
     std::printf("%d passed, %d failed\n", passed, failed);

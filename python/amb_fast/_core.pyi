@@ -191,6 +191,23 @@ def mimo_line_experiments(
     steady_start: bool,
     bins: ArrayLike,
 ) -> tuple[np.ndarray, np.ndarray]: ...
+def mimo_line_sweep(
+    M: list[ArrayLike],
+    Bf: list[ArrayLike],
+    Bn: list[ArrayLike],
+    C: list[ArrayLike],
+    Dn: list[ArrayLike],
+    transducer_pole: list[ArrayLike],
+    sensor_noise: list[ArrayLike],
+    force_noise: list[ArrayLike],
+    period_forces: ArrayLike,
+    settle_periods: list[int],
+    periods: int,
+    seeds: ArrayLike,
+    steady_start: bool,
+    bins: ArrayLike,
+    workers: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...
 def estimate_2x2(
     force_lines: ArrayLike, displacement_lines: ArrayLike
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...

@@ -149,9 +149,7 @@ def estimate2(
     Fp = force if np.iscomplexobj(force) else period_spectra(force, harmonics, period)
     Yp = displacement if np.iscomplexobj(displacement) else period_spectra(displacement, harmonics, period)
     H, receptance, F, Y, var_re, var_im = _core.estimate_2x2(Fp, Yp)
-    w = (2 * np.pi * harmonics * f0)[:, None, None]
-    k = mass * w**2 * np.eye(2) + H.real
-    c = H.imag / w
+    k, c, k_std, c_std = coefficients2(H, var_re, var_im, harmonics * f0, mass)
     scale = 2.0 / period
     return Estimate2(
         freq=harmonics * f0,
@@ -161,13 +159,22 @@ def estimate2(
         c=c,
         k_smooth=_median(k, median_window),
         c_smooth=_median(c, median_window),
-        k_std=np.sqrt(var_re),
-        c_std=np.sqrt(var_im) / w,
+        k_std=k_std,
+        c_std=c_std,
         force=scale * F,
         displacement=scale * Y,
         periods=Fp.shape[0],
         mass=mass,
     )
+
+
+def coefficients2(
+    H: np.ndarray, var_re: np.ndarray, var_im: np.ndarray, freq: np.ndarray, mass: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """k (N/m), c (N s/m) and their standard errors from H = F Y^-1 and the variances of its parts, per
+    line (freq, Hz, along the third axis from the end: (..., lines, 2, 2))."""
+    w = (2 * np.pi * freq)[:, None, None]
+    return mass * w**2 * np.eye(2) + H.real, H.imag / w, np.sqrt(var_re), np.sqrt(var_im) / w
 
 
 def _median(x: np.ndarray, window: int) -> np.ndarray:
@@ -231,29 +238,35 @@ def run_experiment(
     sample.
     """
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
-    spec = controller_matrix(controller)
-    require(excitation.fs == spec.fs, "excitation.fs", excitation.fs, f"equal to the controller's fs ({spec.fs} Hz)")
     periods = integer("periods", periods, 2)
     window = _window(median_window)
     require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
-    poles = require_stable(rig, spec)
-    period = excitation.period_samples
-    if settle_periods is None:
-        settle_periods = 0 if start == "steady" else _settle(rig, spec.fs, poles, period)
-    settle_periods = integer("settle_periods", settle_periods, 0)
-    model = loop_model(rig, spec)
-    s = seed_value(seed)
-    seeds = [s, (s ^ 0xA5A5A5A5DEADBEEF) % 2**64]
-    args = _core_args(model, rig, outputs=2)
+    args, settle, seeds = _point_args(rig, controller, excitation, settle_periods, seed, start)
     harmonics = excitation.harmonics
     # Per-period line spectra in the core. In the periodic steady state they are drawn directly, exact in
     # distribution: the loop is linear, so each period's spectrum at a line is the steady response to the
     # excitation, plus the response to that period's noise spectrum, plus what the change of the state over
     # the period leaks into the line (docs/model.md); from rest the loop runs sample by sample.
-    Fp, Yp = _core.mimo_line_experiments(**args, period_forces=_core_pair(excitation),
-                                         settle_periods=settle_periods, periods=periods, seeds=seeds,
-                                         steady_start=start == "steady", bins=harmonics)  # fmt: skip
-    return estimate2(Fp, Yp, harmonics, period, excitation.f0, rig.mass, window)
+    Fp, Yp = _core.mimo_line_experiments(**args, period_forces=_core_pair(excitation), settle_periods=settle,
+                                         periods=periods, seeds=seeds, steady_start=start == "steady",
+                                         bins=harmonics)  # fmt: skip
+    return estimate2(Fp, Yp, harmonics, excitation.period_samples, excitation.f0, rig.mass, window)
+
+
+def _point_args(
+    rig: TwoAxisRig, controller: ControllerSpec, excitation: Multisine, settle_periods: int | None, seed: int | None,
+    start: str,
+) -> tuple[dict[str, np.ndarray], int, list[int]]:  # fmt: skip
+    """What the core needs of one experiment pair (run_experiment, a sweep's point): the loop's model, the
+    settle periods and both experiments' seeds; :class:`UnstableLoopError` for an unstable loop."""
+    spec = controller_matrix(controller)
+    require(excitation.fs == spec.fs, "excitation.fs", excitation.fs, f"equal to the controller's fs ({spec.fs} Hz)")
+    poles = require_stable(rig, spec)
+    if settle_periods is None:
+        settle_periods = 0 if start == "steady" else _settle(rig, spec.fs, poles, excitation.period_samples)
+    settle = integer("settle_periods", settle_periods, 0)
+    s = seed_value(seed)
+    return _core_args(loop_model(rig, spec), rig, outputs=2), settle, [s, (s ^ 0xA5A5A5A5DEADBEEF) % 2**64]
 
 
 def _settle(rig: TwoAxisRig, fs: float, poles: np.ndarray, period: int) -> int:

@@ -16,7 +16,6 @@ from typing import Any, Union, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.linalg import block_diag
 
 from .._errors import UnstableLoopError
 from .._linear import (
@@ -84,11 +83,29 @@ def _absent(c: Any) -> bool:
     return c is None or (isinstance(c, (int, float)) and c == 0)
 
 
+def _block_diag(*blocks: np.ndarray) -> np.ndarray:
+    """scipy.linalg.block_diag of square matrices, without its array-API overhead (~50 us a call): a
+    sweep builds one loop per point."""
+    sizes = [b.shape[0] for b in blocks]
+    out = np.zeros((sum(sizes), sum(sizes)))
+    at = 0
+    for b, size in zip(blocks, sizes):
+        out[at : at + size, at : at + size] = b
+        at += size
+    return out
+
+
 def mimo_controller(controller: ControllerSpec) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The controller matrix as one discrete state space from e[k] (2 probes, m) to the two current
     commands (A), each entry's own states and delay line stacked block-diagonally."""
-    blocks = [(i, j, controller_matrices(c)) for i, j, c in controller_matrix(controller)]
-    A = block_diag(*[b[2][0] for b in blocks]) if blocks else np.zeros((0, 0))
+    return _mimo_controller(controller_matrix(controller))
+
+
+@functools.lru_cache(maxsize=64)
+def _mimo_controller(controller: ControllerMatrix) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`mimo_controller`, once per distinct controller (a sweep of the rig keeps it); read-only."""
+    blocks = [(i, j, controller_matrices(c)) for i, j, c in controller]
+    A = _block_diag(*[b[2][0] for b in blocks])
     n = A.shape[0]
     B, C, D = np.zeros((n, 2)), np.zeros((2, n)), np.zeros((2, 2))
     at = 0
@@ -98,7 +115,9 @@ def mimo_controller(controller: ControllerSpec) -> tuple[np.ndarray, np.ndarray,
         C[i, at : at + m] = Cc[0]
         D[i, j] += Dc[0, 0]
         at += m
-    return A.reshape(n, n), B, C, D
+    for matrix in (A, B, C, D):
+        matrix.flags.writeable = False
+    return A, B, C, D
 
 
 def plant_matrices2(rig: TwoAxisRig) -> tuple[np.ndarray, np.ndarray, list[str]]:
@@ -108,7 +127,7 @@ def plant_matrices2(rig: TwoAxisRig) -> tuple[np.ndarray, np.ndarray, list[str]]
     """
     parts = [plant_matrices(axis) for axis in rig.axes]
     states = [f"{name}.{s}" for name, (_, _, st) in zip("xy", parts) for s in st]
-    A = block_diag(parts[0][0], parts[1][0])
+    A = _block_diag(parts[0][0], parts[1][0])
     n0 = parts[0][0].shape[0]
     B = np.zeros((A.shape[0], 4))
     B[:n0, [0, 2]] = parts[0][1]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import os
 from collections.abc import Sequence
-from concurrent.futures import Executor, ThreadPoolExecutor
+from concurrent.futures import Executor
 from dataclasses import dataclass, fields, replace
 from functools import partial
 from pathlib import Path
@@ -14,16 +14,17 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .. import _core
 from .._blas import one_blas_thread
 from .._errors import UnstableLoopError
 from .._excitation import Multisine, schroeder_multisine
 from .._linear import AnyController
 from .._params import PID, Rig
 from .._sweep import _grid, point_seeds
-from .._validate import require, seed_value
+from .._validate import integer, require, seed_value
 from ..io._atomic import atomic_write
 from ..plots import _pyplot, _tight_layout
-from ._experiment import Estimate2, run_experiment
+from ._experiment import Estimate2, _core_pair, _point_args, _window, coefficients2, run_experiment
 from ._model import ControllerMatrix, ControllerSpec, controller_matrix, effective_coefficients, stability_margin
 from ._rig import TwoAxisRig
 
@@ -118,7 +119,7 @@ def sweep(
     seed: int | None = None,
     median_window: int = 5,
     start: Literal["steady", "rest"] = "steady",
-    workers: int | None = 1,
+    workers: int | None = None,
     executor: Executor | None = None,
     **axes: ArrayLike,
 ) -> SweepResult2:
@@ -127,32 +128,52 @@ def sweep(
     flagged and left NaN. Point i runs with ``SweepResult2.seeds[i]``, so it reruns alone bit for bit
     with ``run_experiment(*point_model2(rig, controller, point), excitation, seed=seeds[i])``.
 
-    The points run on ``executor`` (any :class:`concurrent.futures.Executor`), else on ``workers``
-    threads (``None``: one per core; the core and numpy's FFT release the GIL), in grid order.
+    Without an ``executor`` the points' loops are made here and run in one call of the compiled core on
+    ``workers`` threads (``None``: one per core), which claim the points in turn, with the GIL released.
+    With one (any :class:`concurrent.futures.Executor`: threads, processes, a dask cluster), each point
+    is a :func:`run_experiment` on it.
     """
+    require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
+    require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
+    periods = integer("periods", periods, 2)
+    _window(median_window)
+    threads = integer("workers", workers if workers is not None else (os.cpu_count() or 1), 1)
     _, points = _grid(dict(axes), grid)
     count = next(iter(points.values())).size
     seeds = point_seeds(seed_value(seed), count)
-    lines = excitation.freq.size
-    shape = (count, lines, 2, 2)
+    shape = (count, excitation.freq.size, 2, 2)
     k, c, k_std, c_std = (np.full(shape, np.nan) for _ in range(4))
     receptance = np.full(shape, np.nan, dtype=complex)
     stable = np.zeros(count, dtype=bool)
     models = [point_model2(rig, controller, {n: float(v[i]) for n, v in points.items()}) for i in range(count)]
-    run = partial(_point, excitation=excitation, periods=periods, median_window=median_window, start=start)
-    own_pool = ThreadPoolExecutor(max_workers=workers or os.cpu_count()) if executor is None and workers != 1 else None
-    try:
-        pool = executor or own_pool
-        estimates = list(pool.map(run, models, seeds.tolist()) if pool else map(run, models, seeds.tolist()))
-    finally:  # our own threads end with the call, whatever a point raised
-        if own_pool is not None:
-            own_pool.shutdown(cancel_futures=True)
-    for i, est in enumerate(estimates):
-        if est is None:
-            continue
-        stable[i] = True
-        k[i], c[i], k_std[i], c_std[i], receptance[i] = est.k, est.c, est.k_std, est.c_std, est.receptance
+    if executor is not None:
+        run = partial(_point, excitation=excitation, periods=periods, median_window=median_window, start=start)
+        for i, est in enumerate(executor.map(run, models, seeds.tolist())):
+            if est is not None:
+                stable[i] = True
+                k[i], c[i], k_std[i], c_std[i], receptance[i] = est.k, est.c, est.k_std, est.c_std, est.receptance
+    else:
+        prepared = [_prepared(model, excitation, int(point_seed), start) for model, point_seed in zip(models, seeds)]
+        stable[:] = [p is not None for p in prepared]
+        ran = [p for p in prepared if p is not None]
+        if ran:
+            args = {name: [a[name] for a, _, _ in ran] for name in ran[0][0]}  # one list per model matrix
+            H, ran_receptance, _, _, var_re, var_im = _core.mimo_line_sweep(
+                **args, period_forces=_core_pair(excitation), settle_periods=[settle for _, settle, _ in ran],
+                periods=periods, seeds=np.array([pair for _, _, pair in ran], dtype=np.uint64),
+                steady_start=start == "steady", bins=excitation.harmonics, workers=threads)  # fmt: skip
+            receptance[stable] = ran_receptance
+            k[stable], c[stable], k_std[stable], c_std[stable] = coefficients2(H, var_re, var_im, excitation.freq,
+                                                                               rig.mass)  # fmt: skip
     return SweepResult2(points, excitation.freq, k, c, k_std, c_std, receptance, stable, seeds)
+
+
+def _prepared(model: tuple[TwoAxisRig, Any], excitation: Multisine, seed: int, start: str) -> tuple | None:
+    """A point's core arguments (two_axis.run_experiment's), or None where its loop is unstable."""
+    try:
+        return _point_args(*model, excitation, None, seed, start)
+    except UnstableLoopError:
+        return None
 
 
 def _point(model: tuple[TwoAxisRig, Any], seed: int, **options: Any) -> Estimate2 | None:
