@@ -99,10 +99,13 @@ def main() -> None:
     swept(1), looped()
     sweep_pairs: dict[str, list[float]] = {"loop": [], "one": [], "two": []}
     for _ in range(max(3, repeats // 4)):
-        for name, run in (("loop", looped), ("one", lambda: swept(1)), ("two", lambda: swept(2))):
+        # The loop last, then a rest: its numpy eigenvalues leave OpenBLAS's threads spinning on the other
+        # core for a while, which would be charged to the next sweep (the sweep limits BLAS to one thread).
+        for name, run in (("one", lambda: swept(1)), ("two", lambda: swept(2)), ("loop", looped)):
             start = time.perf_counter()
             run()
             sweep_pairs[name].append(time.perf_counter() - start)
+        time.sleep(0.3)
     loop_t, one_t, two_t = (np.array(sweep_pairs[k]) for k in ("loop", "one", "two"))
     measured["40-point two-axis sweep, 1 thread (wall, ms)"] = float(np.median(one_t))
     measured["40-point two-axis sweep, 2 threads (wall, ms)"] = float(np.median(two_t))
