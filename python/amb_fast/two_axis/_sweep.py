@@ -163,8 +163,8 @@ def sweep(
                 periods=periods, seeds=np.array([pair for _, _, pair in ran], dtype=np.uint64),
                 steady_start=start == "steady", bins=excitation.harmonics, workers=threads)  # fmt: skip
             receptance[stable] = ran_receptance
-            k[stable], c[stable], k_std[stable], c_std[stable] = coefficients2(H, var_re, var_im, excitation.freq,
-                                                                               rig.mass)  # fmt: skip
+            freq = excitation.harmonics * excitation.f0  # as run_experiment computes them, to the bit
+            k[stable], c[stable], k_std[stable], c_std[stable] = coefficients2(H, var_re, var_im, freq, rig.mass)
     return SweepResult2(points, excitation.freq, k, c, k_std, c_std, receptance, stable, seeds)
 
 
