@@ -16,16 +16,20 @@ FIELDS = ("k", "c", "k_std", "c_std", "receptance")
 
 
 @pytest.mark.parametrize("start", ["steady", "rest"])
-def test_every_point_equals_its_own_experiment_on_threads_and_executors(start) -> None:
+def test_every_point_equals_its_own_experiment_on_threads_and_executors(start, monkeypatch) -> None:
+    """On one thread and two, in one core call and in several, and on an executor."""
     coupled = ta.TwoAxisRig(x=af.Rig.paper(), y=af.Rig.paper(), kxy=2e3, kyx=-2e3)  # drawn whole, not by axis
     sphs = af.schroeder_multisine(f0=20.0, f_max=200.0)
-    axes = dict(kxy=[0.0, 4e3], kp=[900.0, 2200.0, 2600.0])  # kp = 900 A/m is unstable
-    results = [ta.sweep(coupled, af.PID.paper(), sphs, periods=3, seed=5, start=start, workers=w, **axes)
-               for w in (1, 2)]  # fmt: skip
+    settle = 3 if start == "rest" else None
+    axes = dict(kxy=np.linspace(0.0, 4e3, 12), kp=[900.0, 2200.0, 2600.0])  # kp = 900 A/m is unstable
+    options = dict(periods=3, seed=5, start=start, settle_periods=settle, progress=False)
+    results = [ta.sweep(coupled, af.PID.paper(), sphs, workers=w, **options, **axes) for w in (1, 2)]
+    monkeypatch.setattr(_sweep, "CALL_BYTES", 1)  # calls of 32 points a thread: 36 points in two calls
+    results.append(ta.sweep(coupled, af.PID.paper(), sphs, workers=1, **options, **axes))
     with ThreadPoolExecutor(2) as pool:
-        results.append(ta.sweep(coupled, af.PID.paper(), sphs, periods=3, seed=5, start=start, executor=pool, **axes))
+        results.append(ta.sweep(coupled, af.PID.paper(), sphs, executor=pool, **options, **axes))
     first = results[0]
-    np.testing.assert_array_equal(first.stable, [False, True, True] * 2)
+    np.testing.assert_array_equal(first.stable, [False, True, True] * 12)
     for i in range(first.stable.size):
         point = {name: values[i] for name, values in first.params.items()}
         if not first.stable[i]:
@@ -33,7 +37,7 @@ def test_every_point_equals_its_own_experiment_on_threads_and_executors(start) -
                 assert not result.stable[i] and all(np.isnan(getattr(result, name)[i]).all() for name in FIELDS)
             continue
         alone = ta.run_experiment(*ta.point_model2(coupled, af.PID.paper(), point), sphs, periods=3,
-                                  seed=int(first.seeds[i]), start=start)  # fmt: skip
+                                  seed=int(first.seeds[i]), start=start, settle_periods=settle)  # fmt: skip
         for result in results:
             for name in FIELDS:
                 np.testing.assert_array_equal(getattr(result, name)[i], getattr(alone, name), err_msg=f"{name} at {i}")
@@ -58,3 +62,16 @@ def test_a_failing_point_raises(monkeypatch) -> None:
     with ThreadPoolExecutor(2) as pool, pytest.raises(ValueError, match="disk full"):
         ta.sweep(ta.TwoAxisRig.paper(), af.PID.paper(), sphs, periods=2, executor=pool, kxy=[0.0, 1e3, 2e3, 3e3])
     assert 2e3 in calls
+
+
+def test_progress_bar_when_asked_and_the_one_axis_call_takes_the_same_arguments(capsys) -> None:
+    pytest.importorskip("tqdm")
+    sphs = af.schroeder_multisine(f0=10.0, f_max=50.0)
+    rig = ta.TwoAxisRig.paper()
+    result = af.sweep(rig, af.PID.paper(), sphs, periods=2, seed=1, progress=True, kxy=[0.0, 1e3])
+    assert "2/2" in capsys.readouterr().err
+    quiet = af.sweep(rig, af.PID.paper(), sphs, periods=2, seed=1, progress=False, kxy=[0.0, 1e3])
+    assert capsys.readouterr().err == ""
+    np.testing.assert_array_equal(result.k, quiet.k)
+    with pytest.raises(ValueError, match="progress"):
+        ta.sweep(rig, af.PID.paper(), sphs, progress="yes", kxy=[0.0])

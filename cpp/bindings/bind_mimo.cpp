@@ -186,21 +186,21 @@ void bind_mimo(py::module_& m) {
                 experiment_forces(period_forces, 2, std::vector<std::uint64_t>(2), periods, L);
             const auto points = static_cast<Eigen::Index>(n), B = static_cast<Eigen::Index>(bins.size());
             const std::vector<py::ssize_t> shape{points, B, 2, 2};
-            py::array_t<std::complex<double>> H(shape), receptance(shape), force(shape), displacement(shape);
+            py::array_t<std::complex<double>> H(shape), receptance(shape);
             py::array_t<double> var_re(shape), var_im(shape);
-            const MimoSweepOutput out{H.mutable_data(),       receptance.mutable_data(), force.mutable_data(),
-                                      displacement.mutable_data(), var_re.mutable_data(),     var_im.mutable_data()};
+            const MimoSweepOutput out{H.mutable_data(), receptance.mutable_data(), var_re.mutable_data(),
+                                      var_im.mutable_data()};
             interruptible([&] {
                 mimo_line_sweep(models, forces.data(), L, settle_periods, periods, pairs, steady_start, bins, workers,
                                 out);
                 return 0;
             });
-            return py::make_tuple(H, receptance, force, displacement, var_re, var_im);
+            return py::make_tuple(H, receptance, var_re, var_im);
         },
         py::arg("M"), py::arg("Bf"), py::arg("Bn"), py::arg("C"), py::arg("Dn"), py::arg("transducer_pole"),
         py::arg("sensor_noise"), py::arg("force_noise"), py::arg("period_forces"), py::arg("settle_periods"),
         py::arg("periods"), py::arg("seeds"), py::arg("steady_start"), py::arg("bins"), py::arg("workers"),
         "Two-axis sweep: per point (lists of the models' matrices, settle_periods, seeds (points, 2)), "
         "mimo_line_experiments then estimate_2x2, on `workers` threads (<= 0: all cores), GIL released, Ctrl-C "
-        "stops it. Returns estimate_2x2's H, receptance, F, Y, var_re, var_im, each (points, lines, 2, 2).");
+        "stops it. Returns estimate_2x2's H, receptance, var_re, var_im, each (points, lines, 2, 2).");
 }

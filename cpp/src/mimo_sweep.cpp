@@ -29,8 +29,6 @@ void mimo_line_sweep(const std::vector<MimoModel>& models, const double* const* 
                 const Eigen::Index at = i * B * 4;
                 std::copy(e.H.begin(), e.H.end(), out.H + at);
                 std::copy(e.receptance.begin(), e.receptance.end(), out.receptance + at);
-                std::copy(e.force.begin(), e.force.end(), out.force + at);
-                std::copy(e.displacement.begin(), e.displacement.end(), out.displacement + at);
                 std::copy(e.var_re.begin(), e.var_re.end(), out.var_re + at);
                 std::copy(e.var_im.begin(), e.var_im.end(), out.var_im + at);
             }

@@ -12,10 +12,10 @@
 
 namespace amb_fast {
 
-// Where the points' estimates go, each (points, lines, 2, 2) row-major: point i's 2x2 matrices of line j
-// start at (i * lines + j) * 4, laid out as Estimate2x2's.
+// Where the points' estimates go (what a sweep keeps of Estimate2x2), each (points, lines, 2, 2)
+// row-major: point i's 2x2 matrices of line j start at (i * lines + j) * 4.
 struct MimoSweepOutput {
-    std::complex<double>*H, *receptance, *force, *displacement;
+    std::complex<double>*H, *receptance;
     double *var_re, *var_im;
 };
 

@@ -20,7 +20,7 @@ from .._errors import UnstableLoopError
 from .._excitation import Multisine, schroeder_multisine
 from .._linear import AnyController
 from .._params import PID, Rig
-from .._sweep import _grid, point_seeds
+from .._sweep import _grid, _progress_bar, point_seeds
 from .._validate import integer, require, seed_value
 from ..io._atomic import atomic_write
 from ..plots import _pyplot, _tight_layout
@@ -31,6 +31,8 @@ from ._rig import TwoAxisRig
 _RIG_FIELDS = ("kxy", "kyx", "cxy", "cyx", "sensor_angle")
 _AXIS_FIELDS = tuple(f.name for f in fields(Rig) if f.name not in ("force_law", "substeps", "mass"))
 _GAINS = ("kp", "ki", "kd", "derivative_cutoff")
+#: Estimates per core call of a sweep, bytes (its loops' matrices come on top, about as much again).
+CALL_BYTES = 2**25
 
 
 @dataclass(frozen=True)
@@ -116,11 +118,13 @@ def sweep(
     *,
     grid: Literal["product", "zip"] = "product",
     periods: int = 10,
+    settle_periods: int | None = None,
     seed: int | None = None,
     median_window: int = 5,
     start: Literal["steady", "rest"] = "steady",
     workers: int | None = None,
     executor: Executor | None = None,
+    progress: bool | None = None,
     **axes: ArrayLike,
 ) -> SweepResult2:
     """:func:`run_experiment` over a grid of two-axis points (names: see :func:`point_model2`), e.g.
@@ -128,14 +132,20 @@ def sweep(
     flagged and left NaN. Point i runs with ``SweepResult2.seeds[i]``, so it reruns alone bit for bit
     with ``run_experiment(*point_model2(rig, controller, point), excitation, seed=seeds[i])``.
 
-    Without an ``executor`` the points' loops are made here and run in one call of the compiled core on
-    ``workers`` threads (``None``: one per core), which claim the points in turn, with the GIL released.
-    With one (any :class:`concurrent.futures.Executor`: threads, processes, a dask cluster), each point
-    is a :func:`run_experiment` on it.
+    Without an ``executor`` the points' loops are made here and run in calls of the compiled core on
+    ``workers`` threads (``None``: one per core), which claim the points in turn, with the GIL released;
+    a call takes up to ~32 MB of estimates (about 500 points of 200 lines) and its points' loops, so a
+    large grid is never held twice, and ~20 calls with a progress bar (``progress``: a tqdm bar; default
+    when stderr is a terminal). With an ``executor`` (any :class:`concurrent.futures.Executor`: threads,
+    processes, a dask cluster), each point is a :func:`run_experiment` on it. ``settle_periods``: as in
+    :func:`run_experiment` (from rest; default from the slowest pole, per point).
     """
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
     require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
+    require(progress in (None, True, False), "progress", progress, "True, False or None")
     periods = integer("periods", periods, 2)
+    if settle_periods is not None:
+        settle_periods = integer("settle_periods", settle_periods, 0)
     _window(median_window)
     threads = integer("workers", workers if workers is not None else (os.cpu_count() or 1), 1)
     _, points = _grid(dict(axes), grid)
@@ -145,33 +155,57 @@ def sweep(
     k, c, k_std, c_std = (np.full(shape, np.nan) for _ in range(4))
     receptance = np.full(shape, np.nan, dtype=complex)
     stable = np.zeros(count, dtype=bool)
-    models = [point_model2(rig, controller, {n: float(v[i]) for n, v in points.items()}) for i in range(count)]
-    if executor is not None:
-        run = partial(_point, excitation=excitation, periods=periods, median_window=median_window, start=start)
-        for i, est in enumerate(executor.map(run, models, seeds.tolist())):
-            if est is not None:
-                stable[i] = True
-                k[i], c[i], k_std[i], c_std[i], receptance[i] = est.k, est.c, est.k_std, est.c_std, est.receptance
-    else:
-        prepared = [_prepared(model, excitation, int(point_seed), start) for model, point_seed in zip(models, seeds)]
-        stable[:] = [p is not None for p in prepared]
-        ran = [p for p in prepared if p is not None]
-        if ran:
-            args = {name: [a[name] for a, _, _ in ran] for name in ran[0][0]}  # one list per model matrix
-            H, ran_receptance, _, _, var_re, var_im = _core.mimo_line_sweep(
-                **args, period_forces=_core_pair(excitation), settle_periods=[settle for _, settle, _ in ran],
-                periods=periods, seeds=np.array([pair for _, _, pair in ran], dtype=np.uint64),
-                steady_start=start == "steady", bins=excitation.harmonics, workers=threads)  # fmt: skip
-            receptance[stable] = ran_receptance
+
+    def model(i: int) -> tuple[TwoAxisRig, Any]:
+        return point_model2(rig, controller, {n: float(v[i]) for n, v in points.items()})
+
+    def keep(i: int, est: Estimate2) -> None:
+        stable[i] = True
+        k[i], c[i], k_std[i], c_std[i], receptance[i] = est.k, est.c, est.k_std, est.c_std, est.receptance
+
+    bar = _progress_bar(progress, count)
+    try:
+        if executor is not None:
+            run = partial(_point, excitation=excitation, periods=periods, settle_periods=settle_periods,
+                          median_window=median_window, start=start)  # fmt: skip
+            for i, est in enumerate(executor.map(run, (model(i) for i in range(count)), seeds.tolist())):
+                if est is not None:
+                    keep(i, est)
+                if bar is not None:
+                    bar.update(1)
+        else:
+            # Core calls of <= ~32 MB of estimates (4 x 80 bytes per line and point), >= 32 points a thread.
+            size = max(32 * threads, CALL_BYTES // (320 * excitation.freq.size))
+            if bar is not None:
+                size = min(size, max(32 * threads, -(-count // 20)))
             freq = excitation.harmonics * excitation.f0  # as run_experiment computes them, to the bit
-            k[stable], c[stable], k_std[stable], c_std[stable] = coefficients2(H, var_re, var_im, freq, rig.mass)
+            for first in range(0, count, size):
+                rows = np.arange(first, min(first + size, count))
+                prepared = [_prepared(model(i), excitation, settle_periods, int(seeds[i]), start) for i in rows]
+                ran = rows[[p is not None for p in prepared]]
+                stable[ran] = True
+                given = [p for p in prepared if p is not None]
+                if given:
+                    args = {name: [a[name] for a, _, _ in given] for name in given[0][0]}  # a list per model matrix
+                    H, receptance[ran], var_re, var_im = _core.mimo_line_sweep(
+                        **args, period_forces=_core_pair(excitation), settle_periods=[settle for _, settle, _ in given],
+                        periods=periods, seeds=np.array([pair for _, _, pair in given], dtype=np.uint64),
+                        steady_start=start == "steady", bins=excitation.harmonics, workers=threads)  # fmt: skip
+                    k[ran], c[ran], k_std[ran], c_std[ran] = coefficients2(H, var_re, var_im, freq, rig.mass)
+                if bar is not None:
+                    bar.update(rows.size)
+    finally:
+        if bar is not None:
+            bar.close()
     return SweepResult2(points, excitation.freq, k, c, k_std, c_std, receptance, stable, seeds)
 
 
-def _prepared(model: tuple[TwoAxisRig, Any], excitation: Multisine, seed: int, start: str) -> tuple | None:
+def _prepared(
+    model: tuple[TwoAxisRig, Any], excitation: Multisine, settle_periods: int | None, seed: int, start: str
+) -> tuple | None:
     """A point's core arguments (two_axis.run_experiment's), or None where its loop is unstable."""
     try:
-        return _point_args(*model, excitation, None, seed, start)
+        return _point_args(*model, excitation, settle_periods, seed, start)
     except UnstableLoopError:
         return None
 
