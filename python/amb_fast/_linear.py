@@ -7,7 +7,7 @@ The code is in three modules; import it from here, as the rest of the package do
 (the plant, the controller and the closed loop as state spaces), ``_linear_poles`` (the closed-loop
 poles as runs and sweeps compute them, the stability check, settling), ``_linear_response`` (the
 receptance, the sensitivity and its margin, the effective coefficients). ``__all__`` also names the
-private helpers that the sweep, the calibration and the tests import from here.
+private helpers that the sweep, the calibration, the two-axis model and the tests import from here.
 """
 
 from __future__ import annotations
@@ -15,6 +15,8 @@ from __future__ import annotations
 from ._linear_loop import (
     AnyController,
     DesignController,
+    _dead_time_columns,
+    _zoh,
     closed_loop,
     controller_matrices,
     core_controller,
@@ -27,6 +29,7 @@ from ._linear_loop import (
 from ._linear_poles import (
     _closed_loop_stacks,
     _gain_arrays,
+    _unstable_error,
     closed_loop_poles,
     loop_poles,
     require_stable,
@@ -49,9 +52,12 @@ from ._linear_response import (
 
 __all__ = [
     "_closed_loop_stacks",
+    "_dead_time_columns",
     "_gain_arrays",
     "_plant_responses",
     "_response",
+    "_unstable_error",
+    "_zoh",
     "AnyController",
     "DesignController",
     "StabilityMargin",

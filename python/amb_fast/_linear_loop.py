@@ -106,24 +106,36 @@ def discrete_plant(rig: Rig, fs: float) -> tuple[np.ndarray, np.ndarray, list[st
     if line == 0:
         return Phi, Gamma, states
     n = len(states)
-    G0, G1 = Gamma[:, 1], np.zeros(n)
-    if fraction > 0:
-        late_Phi, late_Gamma = _zoh(A, B, T - fraction)
-        G0, G1 = late_Gamma[:, 1], late_Phi @ _zoh(A, B, fraction)[1][:, 1]
     Phi2 = np.zeros((n + line, n + line))
     Gamma2 = np.zeros((n + line, 2))
     Phi2[:n, :n] = Phi
     Gamma2[:n, 0] = Gamma[:, 0]
-    if samples == 0:
-        Gamma2[:n, 1] = G0
-    else:
-        Phi2[:n, n + samples - 1] = G0
-    if fraction > 0:
-        Phi2[:n, n + line - 1] = G1
+    Gamma2[:n, 1], Phi2[:n, n:] = _dead_time_columns(A, B, Gamma, 1, T, (samples, fraction))
     Gamma2[n, 1] = 1.0  # dead1' = u
-    for j in range(1, line):
-        Phi2[n + j, n + j - 1] = 1.0
+    Phi2[n:, n:] = np.eye(line, k=-1)  # dead(j+1)' = dead(j)
     return Phi2, Gamma2, states + [f"dead{j + 1}" for j in range(line)]
+
+
+def _dead_time_columns(
+    A: np.ndarray, B: np.ndarray, Gamma: np.ndarray, col: int, T: float, split: tuple[int, float]
+) -> tuple[np.ndarray, np.ndarray]:
+    """How the command of input ``col`` reaches the sampled plant when it arrives ``split = (m, delta)``
+    (:func:`split_dead_time`) late (see :func:`discrete_plant`): ``(now, delayed)``, the plant's column of
+    ``Gamma`` for this sample's command (``G0`` when ``m == 0``, else zero) and its columns for the
+    command line ``dead1 .. dead<m + (delta > 0)>`` (``G0`` at ``dead<m>``, ``G1`` at the last when
+    ``delta > 0``, zero elsewhere). ``A``, ``B``: the continuous plant; ``Gamma``: its hold over ``T``."""
+    samples, fraction = split
+    n = A.shape[0]
+    G0, G1 = Gamma[:, col], np.zeros(n)
+    if fraction > 0:
+        late_Phi, late_Gamma = _zoh(A, B, T - fraction)
+        G0, G1 = late_Gamma[:, col], late_Phi @ _zoh(A, B, fraction)[1][:, col]
+    delayed = np.zeros((n, samples + (fraction > 0)))
+    if samples > 0:
+        delayed[:, samples - 1] = G0
+    if fraction > 0:
+        delayed[:, -1] = G1
+    return (G0 if samples == 0 else np.zeros(n)), delayed
 
 
 def sensor_row(states: list[str]) -> np.ndarray:

@@ -54,16 +54,20 @@ def require_stable(rig: Rig, controller: AnyController) -> np.ndarray:
     poles.flags.writeable = False
     bad = poles[np.abs(poles) >= 1.0]
     if bad.size:
-        shown = ", ".join(f"{p:.6g} (|z|={abs(p):.6g})" for p in bad[:4])
         if isinstance(controller, PID):
             what = (f"kp={controller.kp} A/m, ki={controller.ki} A/(m s), kd={controller.kd} A s/m, "
                     f"delay={controller.delay}")  # fmt: skip
         else:
             what = repr(controller)
-        raise UnstableLoopError(
-            f"the closed loop is unstable with {what}: pole(s) on or outside the unit circle: {shown}", bad
-        )
+        raise _unstable_error(f"the closed loop is unstable with {what}", bad)
     return poles
+
+
+def _unstable_error(loop: str, bad: np.ndarray) -> UnstableLoopError:
+    """The error for a closed loop with the poles ``bad`` on or outside the unit circle (the first four
+    shown); ``loop`` begins the message ("the closed loop is unstable with ...")."""
+    shown = ", ".join(f"{p:.6g} (|z|={abs(p):.6g})" for p in bad[:4])
+    return UnstableLoopError(f"{loop}: pole(s) on or outside the unit circle: {shown}", bad)
 
 
 def _gain_arrays(pid: PID, kp: ArrayLike | None, ki: ArrayLike | None, kd: ArrayLike | None) -> np.ndarray:

@@ -34,12 +34,15 @@ def _frequencies(freq: ArrayLike, fs: float | None = None) -> np.ndarray:
     return f
 
 
-def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, z: np.ndarray) -> np.ndarray:
-    """C (zI - A)^-1 B for each z; shapes (outputs, inputs, len(z))."""
+def _response(
+    A: np.ndarray, B: np.ndarray, C: np.ndarray, z: np.ndarray, *, frequency_first: bool = False
+) -> np.ndarray:
+    """C (zI - A)^-1 B for each z; shape (outputs, inputs, len(z)), or with ``frequency_first`` (len(z),
+    outputs, inputs) (as two axes want it: a stack of matrices)."""
     n = A.shape[0]
     M = z[:, None, None] * np.eye(n) - A
     X = np.linalg.solve(M, np.broadcast_to(B, (z.size, *B.shape)))
-    return np.einsum("on,fni->oif", C, X)
+    return np.einsum("on,fni->foi" if frequency_first else "on,fni->oif", C, X)
 
 
 @two_axis_aware

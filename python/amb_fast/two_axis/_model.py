@@ -17,11 +17,13 @@ from typing import Any, Union, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._errors import UnstableLoopError
 from .._linear import (
     AnyController,
-    DesignController,
     StabilityMargin,
+    _dead_time_columns,
+    _response,
+    _unstable_error,
+    _zoh,
     controller_matrices,
     controller_response,
     is_controller,
@@ -30,7 +32,6 @@ from .._linear import (
     split_dead_time,
     transducer_response,
 )
-from .._linear_loop import _zoh
 from .._validate import require
 from ._rig import TwoAxisRig
 
@@ -182,24 +183,12 @@ def discrete_plant2(rig: TwoAxisRig, fs: float) -> tuple[np.ndarray, np.ndarray,
     Gamma2[:n, :2] = Gamma[:, :2]
     names = list(states)
     at = n
-    for a, ((samples, fraction), line) in enumerate(zip(splits, lines)):
+    for a, (split, line) in enumerate(zip(splits, lines)):
         col = 2 + a
-        if line == 0:
-            Gamma2[:n, col] = Gamma[:, col]
-            continue
-        G0, G1 = Gamma[:, col], np.zeros(n)
-        if fraction > 0:
-            late_Phi, late_Gamma = _zoh(A, B, T - fraction)
-            G0, G1 = late_Gamma[:, col], late_Phi @ _zoh(A, B, fraction)[1][:, col]
-        if samples == 0:
-            Gamma2[:n, col] = G0
-        else:
-            Phi2[:n, at + samples - 1] = G0
-        if fraction > 0:
-            Phi2[:n, at + line - 1] = G1
-        Gamma2[at, col] = 1.0
-        for j in range(1, line):
-            Phi2[at + j, at + j - 1] = 1.0
+        Gamma2[:n, col], Phi2[:n, at : at + line] = _dead_time_columns(A, B, Gamma, col, T, split)
+        if line:
+            Gamma2[at, col] = 1.0  # <axis>.dead1' = u
+            Phi2[at : at + line, at : at + line] = np.eye(line, k=-1)  # <axis>.dead(j+1)' = <axis>.dead(j)
         names += [f"{'xy'[a]}.dead{j + 1}" for j in range(line)]
         at += line
     return Phi2, Gamma2, names
@@ -283,23 +272,17 @@ def _require_stable(rig: TwoAxisRig, controller: ControllerMatrix) -> np.ndarray
     poles.flags.writeable = False
     bad = poles[np.abs(poles) >= 1.0]
     if bad.size:
-        shown = ", ".join(f"{p:.6g} (|z|={abs(p):.6g})" for p in bad[:4])
-        raise UnstableLoopError(f"the two-axis closed loop is unstable: pole(s) on or outside the unit circle: {shown}",
-                                bad)  # fmt: skip
+        raise _unstable_error("the two-axis closed loop is unstable", bad)
     return poles
 
 
 def _frequencies(freq: ArrayLike, fs: float) -> np.ndarray:
+    """``freq`` as a 1-D array (a scalar too), checked below Nyquist; unlike the one-axis check, one message
+    for all faults and no 0-d or 2-D arrays (results are stacks of 2x2 matrices, one per frequency)."""
     f = np.atleast_1d(np.asarray(freq, dtype=float))
     ok = f.ndim == 1 and bool(np.all(np.isfinite(f))) and bool(np.all(f > 0)) and bool(np.all(f < fs / 2))
     require(ok, "freq", freq, f"a 1-D array of frequencies in (0, {fs / 2}) Hz")
     return f
-
-
-def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, z: np.ndarray) -> np.ndarray:
-    """C (zI - A)^-1 B for each z: shape (len(z), outputs, inputs)."""
-    X = np.linalg.solve(z[:, None, None] * np.eye(A.shape[0]) - A, np.broadcast_to(B, (z.size, *B.shape)))
-    return np.einsum("on,fni->foi", C, X)
 
 
 def predict(rig: TwoAxisRig, controller: ControllerSpec, freq: ArrayLike) -> np.ndarray:
@@ -311,7 +294,7 @@ def predict(rig: TwoAxisRig, controller: ControllerSpec, freq: ArrayLike) -> np.
     model = loop_model(rig, controller)
     f = _frequencies(freq, model.fs)
     z = np.exp(2j * np.pi * f / model.fs)
-    P = _response(model.M, model.Bf, model.C[:2], z)
+    P = _response(model.M, model.Bf, model.C[:2], z, frequency_first=True)
     T = np.stack([transducer_response(axis, model.fs, z) for axis in rig.axes], axis=-1)  # (freq, 2)
     return P / T[:, None, :]
 
@@ -324,9 +307,9 @@ def sensitivity(rig: TwoAxisRig, controller: ControllerSpec, freq: ArrayLike) ->
     f = _frequencies(freq, model.fs)
     z = np.exp(2j * np.pi * f / model.fs)
     Phi, Gamma, states = discrete_plant2(rig, model.fs)
-    P = _response(Phi, Gamma[:, 2:], sensor_rows(rig, states), z)
+    P = _response(Phi, Gamma[:, 2:], sensor_rows(rig, states), z, frequency_first=True)
     Ac, Bc, Cc, Dc = mimo_controller(controller)
-    K = Dc + (_response(Ac, Bc, Cc, z) if Ac.size else 0.0)
+    K = Dc + (_response(Ac, Bc, Cc, z, frequency_first=True) if Ac.size else 0.0)
     return np.linalg.inv(np.eye(2) - K @ P)
 
 
@@ -387,7 +370,7 @@ def effective_coefficients(
     require(f.ndim == 1 and bool(np.all(np.isfinite(f) & (f > 0))), "freq", freq, "finite and > 0 (Hz)")
     G = np.zeros((f.size, 2, 2), dtype=complex)
     for i, j, c in spec:
-        G[:, i, j] = _entry_response(c, f, discrete)
+        G[:, i, j] = controller_response(c, f, discrete=discrete)
     G = G @ rig.rotation.T
     kyy = np.array([a.kyy for a in rig.axes])
     kiy = np.array([a.kiy for a in rig.axes])[:, None]
@@ -397,7 +380,3 @@ def effective_coefficients(
     if process:
         K, C = K + rig.process_stiffness, C + rig.process_damping
     return K, C
-
-
-def _entry_response(c: DesignController, f: np.ndarray, discrete: bool) -> np.ndarray:
-    return controller_response(c, f, discrete=discrete)
