@@ -247,3 +247,21 @@ def test_a_linear_point_reaching_its_clearance_is_flagged_beside_the_others(setu
         assert result.status[i] == "ok"
         np.testing.assert_array_equal(result.k[i], single.k)
     assert list(result.status) == ["touchdown", "ok", "ok"]
+
+
+def test_a_sweeps_arrays_own_the_cores_memory_and_are_writable(setup) -> None:
+    """The core's arrays are handed over without a copy: numpy arrays that keep the core's memory alive as
+    long as any view of them lives, and writable like any result."""
+    import gc
+
+    rig, pid, excitation = setup
+    kwargs = dict(kp=[2000.0, 2400.0], seed=3, periods=3, progress=False)
+    row = af.sweep(rig, pid, excitation, **kwargs).k[1]  # a view; the result itself is gone
+    gc.collect()
+    _ = [np.ones(10_000) for _ in range(100)]  # reuse whatever memory was freed
+    again = af.sweep(rig, pid, excitation, **kwargs)
+    np.testing.assert_array_equal(row, again.k[1])
+    for name in FIELDS:
+        assert getattr(again, name).flags.writeable, name
+    again.k[0, 0] = 0.0
+    assert af.sweep(rig, pid, excitation, **kwargs).k[0, 0] != 0.0

@@ -6,6 +6,22 @@
 
 using namespace amb_fast;
 
+namespace {
+// A matrix (row-major) or vector moved into a numpy array that owns it: writable, not copied.
+template <class Matrix>
+py::array owned(Matrix& matrix) {
+    using T = typename Matrix::Scalar;
+    auto* held = new Matrix(std::move(matrix));
+    const py::capsule owner(held, [](void* p) { delete static_cast<Matrix*>(p); });
+    const auto size = static_cast<py::ssize_t>(sizeof(T));
+    if constexpr (Matrix::ColsAtCompileTime == 1)
+        return py::array_t<T>({static_cast<py::ssize_t>(held->size())}, {size}, held->data(), owner);
+    else
+        return py::array_t<T>({static_cast<py::ssize_t>(held->rows()), static_cast<py::ssize_t>(held->cols())},
+                              {static_cast<py::ssize_t>(held->cols()) * size, size}, held->data(), owner);
+}
+}  // namespace
+
 void bind_sweep(py::module_& m) {
     py::enum_<PointStatus>(m, "PointStatus", "Outcome of one point of a sweep.")
         .value("ok", PointStatus::ok)
@@ -25,7 +41,22 @@ void bind_sweep(py::module_& m) {
         .def_readonly("status", &SweepEstimates::status)
         .def_readonly("radius", &SweepEstimates::radius)
         .def_readonly("periods", &SweepEstimates::periods)
-        .def_readonly("blocks", &SweepEstimates::blocks);
+        .def_readonly("blocks", &SweepEstimates::blocks)
+        .def(
+            "take",
+            [](SweepEstimates& e) {
+                py::dict out;
+                out["H"] = owned(e.H);
+                for (auto [name, matrix] : {std::pair{"k", &e.k}, {"c", &e.c}, {"k_std", &e.k_std}, {"c_std", &e.c_std},
+                                            {"k_smooth", &e.k_smooth}, {"c_smooth", &e.c_smooth},
+                                            {"unexcited_displacement", &e.unexcited_displacement}})
+                    out[name] = owned(*matrix);
+                out["status"] = owned(e.status);
+                out["radius"] = owned(e.radius);
+                return out;
+            },
+            "The arrays, moved into numpy arrays that own them (writable, not copied): a dict by name. The "
+            "attributes are empty afterwards.");
 
     m.def(
         "run_sweep",

@@ -102,6 +102,7 @@ class SweepEstimates:
     radius: np.ndarray
     periods: int
     blocks: int
+    def take(self) -> dict[str, np.ndarray]: ...
 
 def simulate(
     rig: Rig, controller: Controller, force: ArrayLike, seed: int = 0

@@ -66,8 +66,10 @@ def _controller_params(controller: AnyController) -> dict[str, float]:
 def _check_names(rig: Rig, controller: AnyController, names: list[str]) -> None:
     known = [*RIG_FIELDS, *_controller_params(controller)]
     for name in names:
-        require(name in known, "sweep axis", name,
-                f"a numeric Rig field or a controller parameter: one of {', '.join(known)}")  # fmt: skip
+        if name not in known:  # the message lists them all: made only when needed
+            require(
+                False, "sweep axis", name, f"a numeric Rig field or a controller parameter: one of {', '.join(known)}"
+            )
 
 
 def point_model(
@@ -177,15 +179,15 @@ def _run_chunk(
                     parts.append((everything[j : j + 1], core_call(everything[j : j + 1])))
                 except (ValueError, OverflowError):
                     overflowed.append(int(rows[j]))
-        if rows.size == n and len(parts) == 1:  # every point in one call: its arrays are the results
+        taken = [(pick, core.take()) for pick, core in parts]  # numpy arrays that own the core's memory
+        if rows.size == n and len(taken) == 1:  # every point in one call: its arrays are the results
             for name in _CORE_FIELDS:
-                out[name] = np.asarray(getattr(parts[0][1], name))
-            out["status"] = out["status"].copy()  # read-only view of the core's; edited below
+                out[name] = taken[0][1][name]
         else:
             unstable_until_run()
-            for pick, core in parts:
+            for pick, arrays in taken:
                 for name in _CORE_FIELDS:
-                    out[name][rows[pick]] = np.asarray(getattr(core, name))
+                    out[name][rows[pick]] = arrays[name]
             out["status"][overflowed] = STATUS_NAMES.index(OVERFLOW)
         for j in rows[out["status"][rows] == STATUS.index("touchdown")]:
             point_rig = rigs[j]  # no clearance to touch on the linear law: the state overflowed
@@ -364,10 +366,13 @@ def sweep(
                 seeds[rows], periods, settle_periods, window, core_threads, start)  # fmt: skip
 
     def collect(rows: slice, part: dict[str, np.ndarray]) -> None:
-        for name, values in part.items():
-            if name not in results:
-                results[name] = np.empty((n, *values.shape[1:]), dtype=values.dtype)
-            results[name][rows] = values
+        if rows.stop - rows.start == n:  # the one chunk: its arrays (made for it, not shared) are the results
+            results.update(part)
+        else:
+            for name, values in part.items():
+                if name not in results:
+                    results[name] = np.empty((n, *values.shape[1:]), dtype=values.dtype)
+                results[name][rows] = values
         if bar is not None:
             bar.update(rows.stop - rows.start)
 
