@@ -43,16 +43,17 @@ def _grid(values: dict[str, ArrayLike], grid: str) -> tuple[dict, dict]:
     for name, given in values.items():
         array = np.atleast_1d(np.asarray(given, dtype=float))
         require(array.ndim == 1 and array.size > 0, name, given, "a non-empty 1-D sequence")
-        require(bool(np.all(np.isfinite(array))), name, given, f"finite ({unit_of(name) or 'no unit'})")
+        if not np.isfinite(array).all():
+            require(False, name, given, f"finite ({unit_of(name) or 'no unit'})")
         axes[name] = array
     require(bool(axes), "axes", None, "at least one swept parameter (e.g. kp=[...], amp_bandwidth=[...])")
-    if grid == "product":
+    if grid == "product" and len(axes) > 1:
         mesh = np.meshgrid(*axes.values(), indexing="ij")
         points = {name: m.ravel() for name, m in zip(axes, mesh)}
-    else:
+    else:  # zip, or one axis: the points are the axes' values
         sizes = {name: a.size for name, a in axes.items()}
         require(len(set(sizes.values())) == 1, "lengths", sizes, "equal for grid='zip'")
-        points = dict(axes)
+        points = {name: a.copy() for name, a in axes.items()}
     return axes, points
 
 
