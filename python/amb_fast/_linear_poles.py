@@ -75,8 +75,11 @@ def _gain_arrays(pid: PID, kp: ArrayLike | None, ki: ArrayLike | None, kd: Array
     given = {"kp": kp, "ki": ki, "kd": kd}
     arrays = [np.asarray(pid.__dict__[n] if v is None else v, dtype=float) for n, v in given.items()]
     for name, array in zip(given, arrays):
-        require(bool(np.all(np.isfinite(array))), name, array, "finite")
-    return np.stack(np.broadcast_arrays(*arrays), axis=-1).reshape(-1, 3)
+        require(bool(np.isfinite(array).all()), name, array, "finite")
+    gains = np.empty((*np.broadcast(*arrays).shape, 3))  # (sweeps lay out 40 points in a few us, not 20)
+    for j, array in enumerate(arrays):
+        gains[..., j] = array
+    return gains.reshape(-1, 3)
 
 
 @functools.lru_cache(maxsize=64)
@@ -102,7 +105,7 @@ def _closed_loop_stacks(rig: Rig, pid: PID, gains: np.ndarray):  # noqa: ANN202
     """(rows, stack of closed-loop matrices) per pattern of controller states among the gain sets."""
     structure = replace(pid, kp=0.0, ki=0.0, kd=0.0)
     pattern = (gains[:, 1] != 0) * 1 + (gains[:, 2] != 0) * 2
-    for code in np.unique(pattern):
+    for code in np.flatnonzero(np.bincount(pattern, minlength=4)):  # the patterns present, in order
         rows = np.flatnonzero(pattern == code)
         base, slopes = _affine_closed_loop(rig, structure, bool(code & 1), bool(code >> 1))
         offsets = gains[rows] - np.array([0.0, float(code & 1), float(code >> 1)])
