@@ -10,6 +10,7 @@ import pytest
 
 import amb_fast as af
 import amb_fast.two_axis as ta
+from amb_fast import _sweep as one_axis_sweep
 from amb_fast.two_axis import _sweep
 
 FIELDS = ("k", "c", "k_std", "c_std", "receptance")
@@ -24,7 +25,7 @@ def test_every_point_equals_its_own_experiment_on_threads_and_executors(start, m
     axes = dict(kxy=np.linspace(0.0, 4e3, 12), kp=[900.0, 2200.0, 2600.0])  # kp = 900 A/m is unstable
     options = dict(periods=3, seed=5, start=start, settle_periods=settle, progress=False)
     results = [ta.sweep(coupled, af.PID.paper(), sphs, workers=w, **options, **axes) for w in (1, 2)]
-    monkeypatch.setattr(_sweep, "CALL_BYTES", 1)  # calls of 32 points a thread: 36 points in two calls
+    monkeypatch.setattr(one_axis_sweep, "CALL_BYTES", 1)  # calls of 32 points a thread: 36 points in two calls
     results.append(ta.sweep(coupled, af.PID.paper(), sphs, workers=1, **options, **axes))
     with ThreadPoolExecutor(2) as pool:
         results.append(ta.sweep(coupled, af.PID.paper(), sphs, executor=pool, **options, **axes))

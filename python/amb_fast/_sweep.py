@@ -37,14 +37,25 @@ def point_seeds(seed: int, count: int) -> np.ndarray:
     return z ^ (z >> np.uint64(31))
 
 
+#: Estimates per core call of a sweep (one axis or two), bytes.
+CALL_BYTES = 2**25
+
+
+def points_per_call(count: int, threads: int, bytes_per_point: int, progress: bool) -> int:
+    """Points per core call of a sweep run here: at most ~32 MB of estimates (a grid of several calls is
+    copied out of each, so a larger call would hold them twice), or ~20 calls for a progress bar; at least
+    32 points a thread."""
+    size = min(count, max(32 * threads, CALL_BYTES // bytes_per_point))
+    return min(size, max(32 * threads, -(-count // 20))) if progress else size
+
+
 def _grid(values: dict[str, ArrayLike], grid: str) -> tuple[dict, dict]:
     require(grid in ("product", "zip"), "grid", grid, "'product' or 'zip'")
     axes = {}
     for name, given in values.items():
         array = np.atleast_1d(np.asarray(given, dtype=float))
         require(array.ndim == 1 and array.size > 0, name, given, "a non-empty 1-D sequence")
-        if not np.isfinite(array).all():
-            require(False, name, given, f"finite ({unit_of(name) or 'no unit'})")
+        require(bool(np.isfinite(array).all()), name, given, f"finite ({unit_of(name) or 'no unit'})")
         axes[name] = array
     require(bool(axes), "axes", None, "at least one swept parameter (e.g. kp=[...], amp_bandwidth=[...])")
     if grid == "product" and len(axes) > 1:
@@ -67,10 +78,8 @@ def _controller_params(controller: AnyController) -> dict[str, float]:
 def _check_names(rig: Rig, controller: AnyController, names: list[str]) -> None:
     known = [*RIG_FIELDS, *_controller_params(controller)]
     for name in names:
-        if name not in known:  # the message lists them all: made only when needed
-            require(
-                False, "sweep axis", name, f"a numeric Rig field or a controller parameter: one of {', '.join(known)}"
-            )
+        require(name in known, "sweep axis", name,
+                f"a numeric Rig field or a controller parameter: one of {', '.join(known)}")  # fmt: skip
 
 
 def point_model(
@@ -348,12 +357,7 @@ def sweep(
     size = integer("chunk_size", chunk_size, 1) if chunk_size is not None else 0
     bar = _progress_bar(progress, n)
     if not size and executor is None:
-        # Calls of at most ~32 MB of estimates (the results are copied out of each call, so a larger call
-        # would hold them twice), or ~20 calls for a progress bar; at least 32 points a thread.
-        lines = excitation.harmonics.size
-        size = min(n, max(32 * threads, 2**25 // (72 * lines)))
-        if bar is not None:
-            size = min(size, max(32 * threads, -(-n // 20)))
+        size = points_per_call(n, threads, 72 * excitation.harmonics.size, bar is not None)
     elif not size:  # equal work per worker: a multiple of `threads` chunks, up to eight each, of at least 32 points
         count = min(8 * threads, max(1, -(-n // 32)))
         count = -(-count // threads) * threads

@@ -20,7 +20,7 @@ from .._errors import UnstableLoopError
 from .._excitation import Multisine, schroeder_multisine
 from .._linear import AnyController
 from .._params import PID, Rig
-from .._sweep import _grid, _progress_bar, point_seeds
+from .._sweep import _grid, _progress_bar, point_seeds, points_per_call
 from .._validate import integer, require, seed_value
 from ..io._atomic import atomic_write
 from ..plots import _pyplot, _tight_layout
@@ -31,8 +31,6 @@ from ._rig import TwoAxisRig
 _RIG_FIELDS = ("kxy", "kyx", "cxy", "cyx", "sensor_angle")
 _AXIS_FIELDS = tuple(f.name for f in fields(Rig) if f.name not in ("force_law", "substeps", "mass"))
 _GAINS = ("kp", "ki", "kd", "derivative_cutoff")
-#: Estimates per core call of a sweep, bytes (its loops' matrices come on top, about as much again).
-CALL_BYTES = 2**25
 
 
 @dataclass(frozen=True)
@@ -174,10 +172,8 @@ def sweep(
                 if bar is not None:
                     bar.update(1)
         else:
-            # Core calls of <= ~32 MB of estimates (4 x 80 bytes per line and point), >= 32 points a thread.
-            size = max(32 * threads, CALL_BYTES // (320 * excitation.freq.size))
-            if bar is not None:
-                size = min(size, max(32 * threads, -(-count // 20)))
+            # 4 x 80 bytes of estimates per line and point
+            size = points_per_call(count, threads, 320 * excitation.freq.size, bar is not None)
             freq = excitation.harmonics * excitation.f0  # as run_experiment computes them, to the bit
             for first in range(0, count, size):
                 rows = np.arange(first, min(first + size, count))
