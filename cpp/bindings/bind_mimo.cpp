@@ -182,7 +182,7 @@ void bind_mimo(py::module_& m) {
                 pairs.push_back({seeds.at(k, 0), seeds.at(k, 1)});
             }
             Eigen::Index L = 0;
-            const std::vector<const double*> forces =
+            const std::vector<const double*> forces =  // every point's pair: checked as any two experiments' forces
                 experiment_forces(period_forces, 2, std::vector<std::uint64_t>(2), periods, L);
             const auto points = static_cast<Eigen::Index>(n), B = static_cast<Eigen::Index>(bins.size());
             const std::vector<py::ssize_t> shape{points, B, 2, 2};
