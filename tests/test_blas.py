@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 
 threadpoolctl = pytest.importorskip("threadpoolctl")
@@ -28,10 +30,61 @@ def test_one_blas_thread_inside_and_the_setting_restored() -> None:
 
 def test_the_calibration_entry_points_are_wrapped() -> None:
     from amb_fast import RigFit, design_controller, fit_rig
+    from amb_fast._linear_poles import _affine_closed_loop
 
-    for function in (fit_rig, design_controller, RigFit.predict, RigFit.coefficients, af.sweep, af.two_axis.sweep):
+    entry_points = (
+        fit_rig,
+        design_controller,
+        RigFit.predict,
+        RigFit.coefficients,
+        af.two_axis.sweep,
+        _affine_closed_loop,
+    )
+    for function in entry_points:
         layers = []
         while function is not None:
             layers.append(getattr(function, "one_blas_thread", False))
             function = getattr(function, "__wrapped__", None)
         assert any(layers)
+
+
+def test_a_sweep_makes_its_points_with_blas_on_one_thread() -> None:
+    """Where a sweep makes each point's rig and controller (a factory, a Controller's parameters, Rig
+    fields), on this thread or an executor's, BLAS runs on one thread; a sweep of PID gains here makes its
+    loops from cached matrices and enters no guard."""
+    import concurrent.futures
+
+    from amb_fast import _sweep
+
+    if not blas_threads():
+        pytest.skip("no BLAS library that threadpoolctl can see")
+    rig, pid, sphs = af.Rig.paper(), af.PID.paper(), af.schroeder_multisine(f0=10.0, f_max=100.0)
+    seen: list[list[int]] = []
+
+    def factory(kp: float):  # noqa: ANN202
+        seen.append(blas_threads())
+        return rig, replace(pid, kp=kp)
+
+    with threadpoolctl.threadpool_limits(2, user_api="blas"):
+        outside = blas_threads()
+        af.sweep(factory, sphs, kp=[2000.0, 2500.0], progress=False)
+        with concurrent.futures.ThreadPoolExecutor(2) as pool:
+            af.sweep(factory, sphs, kp=[2000.0, 2500.0], executor=pool, progress=False)
+        assert seen == [[1] * len(outside)] * 4
+        assert blas_threads() == outside
+
+    entered = []
+    original = _sweep.blas_on_one_thread
+
+    def counted():  # noqa: ANN202
+        entered.append(1)
+        return original()
+
+    _sweep.blas_on_one_thread = counted
+    try:
+        af.sweep(rig, pid, sphs, kp=[2000.0, 2500.0], ki=[0.0, 100.0], progress=False)
+        assert entered == []
+        af.sweep(rig, pid, sphs, amp_bandwidth=[900.0, 1100.0], progress=False)
+        assert entered == [1]
+    finally:
+        _sweep.blas_on_one_thread = original

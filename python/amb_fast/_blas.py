@@ -20,17 +20,22 @@ F = TypeVar("F", bound=Callable[..., Any])
 _controller: Any = None
 
 
+def blas_on_one_thread() -> Any:
+    """A context in which the BLAS libraries of the process (OpenBLAS, MKL, ...) run on one thread."""
+    global _controller
+    if _controller is None:  # scanning the loaded libraries costs a few ms: once per process
+        from threadpoolctl import ThreadpoolController
+
+        _controller = ThreadpoolController()
+    return _controller.limit(limits=1, user_api="blas")
+
+
 def one_blas_thread(function: F) -> F:
-    """Run ``function`` with the BLAS libraries of the process (OpenBLAS, MKL, ...) on one thread."""
+    """Run ``function`` with the BLAS libraries of the process on one thread."""
 
     @functools.wraps(function)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
-        global _controller
-        if _controller is None:  # scanning the loaded libraries costs a few ms: once per process
-            from threadpoolctl import ThreadpoolController
-
-            _controller = ThreadpoolController()
-        with _controller.limit(limits=1, user_api="blas"):
+        with blas_on_one_thread():
             return function(*args, **kwargs)
 
     wrapper.one_blas_thread = True  # type: ignore[attr-defined]

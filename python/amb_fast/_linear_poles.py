@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
+from ._blas import one_blas_thread
 from ._dispatch import two_axis_aware
 from ._errors import UnstableLoopError
 from ._linear_loop import AnyController, closed_loop
@@ -75,7 +76,8 @@ def _gain_arrays(pid: PID, kp: ArrayLike | None, ki: ArrayLike | None, kd: Array
     given = {"kp": kp, "ki": ki, "kd": kd}
     arrays = [np.asarray(pid.__dict__[n] if v is None else v, dtype=float) for n, v in given.items()]
     for name, array in zip(given, arrays):
-        require(bool(np.isfinite(array).all()), name, array, "finite")
+        if given[name] is not None:  # (the PID's own gains are finite: checked when it was made)
+            require(bool(np.isfinite(array).all()), name, array, "finite")
     gains = np.empty((*np.broadcast(*arrays).shape, 3))  # (sweeps lay out 40 points in a few us, not 20)
     for j, array in enumerate(arrays):
         gains[..., j] = array
@@ -83,6 +85,7 @@ def _gain_arrays(pid: PID, kp: ArrayLike | None, ki: ArrayLike | None, kd: Array
 
 
 @functools.lru_cache(maxsize=64)
+@one_blas_thread  # on a miss (sweeps of PID gains enter no BLAS guard of their own)
 def _affine_closed_loop(
     rig: Rig, pid: PID, with_integral: bool, with_derivative: bool
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -101,14 +104,23 @@ def _affine_closed_loop(
     return base, np.array(slopes)
 
 
+@functools.lru_cache(maxsize=64)
+def _without_gains(pid: PID) -> PID:
+    """``pid`` with kp = ki = kd = 0: the key of :func:`_affine_closed_loop`'s cache (made once per PID:
+    a sweep's serial Python)."""
+    return replace(pid, kp=0.0, ki=0.0, kd=0.0)
+
+
 def _closed_loop_stacks(rig: Rig, pid: PID, gains: np.ndarray):  # noqa: ANN202
     """(rows, stack of closed-loop matrices) per pattern of controller states among the gain sets."""
-    structure = replace(pid, kp=0.0, ki=0.0, kd=0.0)
+    structure = _without_gains(pid)
     pattern = (gains[:, 1] != 0) * 1 + (gains[:, 2] != 0) * 2
-    for code in np.flatnonzero(np.bincount(pattern, minlength=4)):  # the patterns present, in order
-        rows = np.flatnonzero(pattern == code)
+    codes = np.flatnonzero(np.bincount(pattern, minlength=4))  # the patterns present, in order
+    for code in codes:
+        # (one pattern, as in most sweeps: every row, without picking them out)
+        rows = np.flatnonzero(pattern == code) if codes.size > 1 else np.arange(len(gains))
         base, slopes = _affine_closed_loop(rig, structure, bool(code & 1), bool(code >> 1))
-        offsets = gains[rows] - np.array([0.0, float(code & 1), float(code >> 1)])
+        offsets = (gains[rows] if codes.size > 1 else gains) - np.array([0.0, float(code & 1), float(code >> 1)])
         yield rows, base + np.einsum("nk,kij->nij", offsets, slopes)
 
 

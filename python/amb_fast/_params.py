@@ -253,10 +253,10 @@ class PID:
     def _core_controllers(self, gains: np.ndarray) -> list[_core.Controller]:
         """The core's controllers of this PID with each row of ``gains`` (kp, ki, kd): the numbers of
         ``replace(self, kp=..., ki=..., kd=...)._to_core()``, without making the PIDs (sweeps)."""
-        kp, ki, kd = (np.ascontiguousarray(gains[:, j], dtype=float) for j in range(3))
-        terms = [np.broadcast_to(x, kp.shape) for x in self._terms(kp, ki, kd)]
-        # the core assembles what _modal lays out, entry by entry
-        return _core.pid_controllers(*terms, ki=ki, kd=kd, pole=self._derivative_pole(), fs=self.fs, delay=self.delay)
+        kp, ki, kd = np.ascontiguousarray(gains.T, dtype=float)
+        # the core assembles what _modal lays out, entry by entry (the terms are arrays of kp's shape)
+        return _core.pid_controllers(*self._terms(kp, ki, kd), ki=ki, kd=kd, pole=self._derivative_pole(), fs=self.fs,
+                                     delay=self.delay)  # fmt: skip
 
     def _to_core(self) -> _core.Controller:
         return _core_pid(self)

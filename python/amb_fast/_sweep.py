@@ -6,6 +6,7 @@ import os
 import sys
 from collections.abc import Callable
 from concurrent.futures import Executor
+from contextlib import nullcontext
 from dataclasses import fields, replace
 from typing import Any, Literal
 
@@ -13,7 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
-from ._blas import one_blas_thread
+from ._blas import blas_on_one_thread
 from ._dispatch import two_axis_aware
 from ._excitation import Multisine
 from ._experiment import _plan, _window, automatic_settle
@@ -104,6 +105,12 @@ def point_model(
     return rig, controller
 
 
+def _pid_gains_only(factory: Factory | None, controller: AnyController | None, names: list[str]) -> bool:
+    """Whether a sweep's points differ in a PID's gains alone: then their loops come from cached matrices
+    and their controllers from the gain arrays, without BLAS work per point."""
+    return factory is None and isinstance(controller, PID) and set(names) <= set(SWEPT)
+
+
 def _run_chunk(
     rig: Rig | None, controller: AnyController | None, factory: Factory | None, excitation: Multisine,
     values: dict[str, np.ndarray], seeds: np.ndarray, periods: int, settle_periods: int | None, window: int,
@@ -116,14 +123,15 @@ def _run_chunk(
     n = len(seeds)
     names = list(values)
     in_core: np.ndarray | None = None  # the points' loop matrices, where the core checks their stability
-    radius = np.full(n, np.nan)
-    if factory is None and isinstance(controller, PID) and set(names) <= set(SWEPT):
+    radius = None  # the points' spectral radii, where checked here
+    if _pid_gains_only(factory, controller, names):
         # PID gains only: the closed loop is affine in them, so all loop matrices come from four cached
         # ones, and the core's controllers are made from the gain arrays without a PID per point.
-        assert rig is not None
+        assert rig is not None and isinstance(controller, PID)
         gains = _gain_arrays(controller, values.get("kp"), values.get("ki"), values.get("kd"))
         rigs: list[Rig] = [rig] * n
         controllers: list[AnyController] = [controller] * n  # what the settling rule reads: the same fs
+        distinct_controllers: list[AnyController] = [controller]
         core_controllers = controller._core_controllers(gains)
         stacks = list(_closed_loop_stacks(rig, controller, gains))
         if len(stacks) == 1 and (settle_periods is not None or (start == "steady" and rig.force_law == "linear")):
@@ -138,14 +146,16 @@ def _run_chunk(
         radius = np.array([np.max(np.abs(loop_poles(r, c)), initial=0.0) for r, c in models])
         rigs, controllers = [r for r, _ in models], [c for _, c in models]
         core_controllers = [core_controller(c) for c in controllers]
+        distinct_controllers = list({id(c): c for c in controllers}.values())
     fs = excitation.fs
-    for c in {id(c): c for c in controllers}.values():  # each distinct controller once
+    for c in distinct_controllers:
         require(c.fs == fs, "controller fs", c.fs, f"equal to the excitation's fs ({fs} Hz)")
-    stable = radius < 1.0 if in_core is None else np.ones(n, dtype=bool)  # in the core: flagged there
+    stable = radius < 1.0 if radius is not None else np.ones(n, dtype=bool)  # in the core: flagged there
     if in_core is not None and settle_periods is None:  # one linear rig from the steady start: none
         settle = np.zeros(n, dtype=np.int64)
     elif settle_periods is None:  # the rule of run_experiment, so every point reruns bit for bit
         period = excitation.period_samples
+        assert radius is not None
         settle = np.array([automatic_settle(r, c, float(rad), period, start) if ok else 0
                            for r, c, rad, ok in zip(rigs, controllers, radius, stable)])  # fmt: skip
     else:
@@ -166,27 +176,30 @@ def _run_chunk(
     if not rows.size:
         unstable_until_run()
     else:
-        masses = {rigs[j].mass for j in rows}
-        require(len(masses) == 1, "mass", sorted(masses), "the same at every point of a sweep (kg)")
+        if rigs.count(rigs[0]) == n:  # one rig (a gain sweep): made for the core once
+            point_rigs = [rigs[0]._to_core()] * rows.size
+        else:
+            masses = {rigs[j].mass for j in rows}
+            require(len(masses) == 1, "mass", sorted(masses), "the same at every point of a sweep (kg)")
+            core_rigs = {id(r): r._to_core() for r in {id(rigs[j]): rigs[j] for j in rows}.values()}  # once per rig
+            point_rigs = [core_rigs[id(rigs[j])] for j in rows]
+        point_controllers = core_controllers if rows.size == n else [core_controllers[j] for j in rows]
 
-        core_rigs = {id(r): r._to_core() for r in {id(rigs[j]): rigs[j] for j in rows}.values()}  # once per rig
-
-        def core_call(pick: np.ndarray):  # noqa: ANN202
+        def core_call(pick: slice):  # noqa: ANN202  # the points rows[pick]
             at = rows[pick]
-            return _core.run_sweep(excitation.samples, [core_rigs[id(rigs[j])] for j in at],
-                                   [core_controllers[j] for j in at], settle64[at], seeds[at], periods, plan,
-                                   window, workers, start == "steady",
+            return _core.run_sweep(excitation.samples, point_rigs[pick], point_controllers[pick], settle64[at],
+                                   seeds[at], periods, plan, window, workers, start == "steady",
                                    None if in_core is None else in_core[at])  # fmt: skip
 
-        everything = np.arange(rows.size)
+        everything = slice(0, rows.size)
         overflowed: list[int] = []
         try:
             parts = [(everything, core_call(everything))]
         except (ValueError, OverflowError):  # a point diverged (e.g. under saturation): find it, flag it
             parts = []
-            for j in everything:
+            for j in range(rows.size):
                 try:
-                    parts.append((everything[j : j + 1], core_call(everything[j : j + 1])))
+                    parts.append((slice(j, j + 1), core_call(slice(j, j + 1))))
                 except (ValueError, OverflowError):
                     overflowed.append(int(rows[j]))
         taken = [(pick, core.take()) for pick, core in parts]  # numpy arrays that own the core's memory
@@ -207,6 +220,7 @@ def _run_chunk(
     return out
 
 
+_STATUS_NAMES = np.array(STATUS_NAMES)
 _CORE_FIELDS = ("H", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std", "unexcited_displacement", "status")
 
 
@@ -223,7 +237,6 @@ def _progress_bar(progress: bool | None, total: int):  # noqa: ANN202
 
 
 @two_axis_aware
-@one_blas_thread
 def sweep(
     rig: Rig | Factory,
     controller: AnyController | Multisine,
@@ -381,21 +394,25 @@ def sweep(
         if bar is not None:
             bar.update(rows.stop - rows.start)
 
+    # BLAS on one thread where points are made one by one (thousands of small matrix operations) or on an
+    # executor; a sweep of PID gains here makes none beyond cache misses (one_blas_thread there too).
+    fast = executor is None and _pid_gains_only(factory, base_controller, list(points))
     try:
-        if executor is None:
-            # Here, one chunk after another, each split across `threads` core threads (no Python threads
-            # to start, no GIL between the chunks' points); Ctrl-C reaches the core through this thread.
-            for rows in chunks:
-                collect(rows, _run_chunk(*chunk(rows, threads)))
-        else:  # each chunk on the executor's workers, with `workers` core threads (default one)
-            core_threads = workers if workers is not None else 1
-            futures = [executor.submit(_run_chunk, *chunk(rows, core_threads)) for rows in chunks]
-            for rows, future in zip(chunks, futures):
-                collect(rows, future.result())
+        with nullcontext() if fast else blas_on_one_thread():
+            if executor is None:
+                # Here, one chunk after another, each split across `threads` core threads (no Python threads
+                # to start, no GIL between the chunks' points); Ctrl-C reaches the core through this thread.
+                for rows in chunks:
+                    collect(rows, _run_chunk(*chunk(rows, threads)))
+            else:  # each chunk on the executor's workers, with `workers` core threads (default one)
+                core_threads = workers if workers is not None else 1
+                futures = [executor.submit(_run_chunk, *chunk(rows, core_threads)) for rows in chunks]
+                for rows, future in zip(chunks, futures):
+                    collect(rows, future.result())
     finally:
         if bar is not None:
             bar.close()
-    status = np.array(STATUS_NAMES)[results.pop("status")]
+    status = _STATUS_NAMES[results.pop("status")]
     settle = results.pop("settle_periods")
     if isinstance(base_controller, PID):
         described: Any = base_controller.__dict__
