@@ -9,13 +9,14 @@ from typing import Literal, Union
 
 import numpy as np
 
+from ._equality import ArrayRecord
 from ._validate import integer, real, require
 
 Lines = Union[Literal["all", "odd", "random-odd"], Sequence[float], np.ndarray]
 
 
-@dataclass(frozen=True)
-class Multisine:
+@dataclass(frozen=True, eq=False)
+class Multisine(ArrayRecord):
     """One period of a multisine ``x(t) = sum_n A_n cos(2 pi f_n t + phi_n)``, sampled at ``fs``.
 
     Attributes

@@ -13,14 +13,15 @@ from numpy.typing import ArrayLike
 
 from . import _checks, _core
 from ._dispatch import two_axis_aware, two_recordings_aware
+from ._equality import ArrayRecord
 from ._excitation import Multisine, period_samples
 from ._linear import AnyController, core_controller, require_stable, settle_periods_for, settling_radius
 from ._params import Rig
 from ._validate import integer, optional_positive, real, require, rig_and_controller, seed_value, series
 
 
-@dataclass(frozen=True)
-class UnexcitedLines:
+@dataclass(frozen=True, eq=False)
+class UnexcitedLines(ArrayRecord):
     """Levels at the harmonics of f0 below the highest excited line that carry no excitation.
 
     What shows there is noise plus non-linear distortion.
@@ -40,8 +41,8 @@ class UnexcitedLines:
     displacement: np.ndarray
 
 
-@dataclass(frozen=True)
-class Estimate:
+@dataclass(frozen=True, eq=False)
+class Estimate(ArrayRecord):
     """Frequency-domain estimate at the excited lines (MODEL.md section 3).
 
     Attributes

@@ -12,13 +12,14 @@ from numpy.typing import ArrayLike
 
 from . import _core
 from ._dispatch import two_axis_aware
+from ._equality import ArrayRecord
 from ._linear import AnyController, core_controller, require_stable
 from ._params import Rig
 from ._validate import rig_and_controller, seed_value, series
 
 
-@dataclass(frozen=True)
-class Trace:
+@dataclass(frozen=True, eq=False)
+class Trace(ArrayRecord):
     """Recorded channels of one run, all sampled at ``fs``.
 
     Attributes

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import claims as claim_checks
+from ._equality import ArrayRecord
 from ._excitation import Multisine, schroeder_multisine
 from ._experiment import Estimate, run_experiment
 from ._linear import effective_coefficients
@@ -19,8 +20,8 @@ from ._validate import real, require
 GAINS = ("ki", "kd", "kp")  # the paper's order: sections 3.2.1, 3.2.2, 3.2.3
 
 
-@dataclass(frozen=True)
-class PaperStudy:
+@dataclass(frozen=True, eq=False)
+class PaperStudy(ArrayRecord):
     """Everything the paper's figures and observations are made of.
 
     Attributes

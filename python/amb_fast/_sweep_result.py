@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from ._equality import ArrayRecord
 from ._validate import require
 
 SWEPT = ("kp", "ki", "kd")  # the PID gains: swept together in closed form
@@ -35,8 +36,8 @@ OVERFLOW = "overflow"
 STATUS_NAMES = (*STATUS, OVERFLOW)
 
 
-@dataclass(frozen=True)
-class SweepResult:
+@dataclass(frozen=True, eq=False)
+class SweepResult(ArrayRecord):
     """Estimates of every point of a sweep, in grid order; what :func:`sweep` returns.
 
     Attributes

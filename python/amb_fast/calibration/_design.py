@@ -11,6 +11,7 @@ from numpy.typing import ArrayLike
 from scipy import optimize
 
 from .._blas import one_blas_thread
+from .._equality import ArrayRecord
 from .._linear import (
     AnyController,
     closed_loop_poles,
@@ -29,8 +30,8 @@ GAINS = ("kp", "ki", "kd")
 _GRID_POINTS = 1500  # sensitivity grid of the constraint during the search (the result is checked on 20000)
 
 
-@dataclass(frozen=True)
-class Design:
+@dataclass(frozen=True, eq=False)
+class Design(ArrayRecord):
     """A controller designed by :func:`design_controller`.
 
     Attributes

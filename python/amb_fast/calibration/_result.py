@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from .._blas import one_blas_thread
+from .._equality import ArrayRecord
 from .._linear import AnyController, predict
 from .._params import Rig
 from ._problem import _check_controller, _Space
@@ -20,8 +21,8 @@ CORRELATED = 0.9  # |correlation| above which two parameters are named as not se
 MISFIT_P = 1e-3  # p-value below which the model is said not to fit
 
 
-@dataclass(frozen=True)
-class RigFit:
+@dataclass(frozen=True, eq=False)
+class RigFit(ArrayRecord):
     """A rig calibrated to measured estimates by :func:`fit_rig`.
 
     Attributes

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._equality import ArrayRecord
 from .._validate import real, require, series
 from ._atomic import atomic_write
 from ._channels import _agree, _channel, _choose_recording, _file_fs, _scale
@@ -25,8 +26,8 @@ SUFFIXES = (".csv", ".tsv", ".txt", ".mat", ".tdms")
 CHUNK_LINES = 1 << 16  # rows per chunk when writing
 
 
-@dataclass(frozen=True)
-class Recording:
+@dataclass(frozen=True, eq=False)
+class Recording(ArrayRecord):
     """Force (N) and displacement (m) sampled at ``fs`` (Hz).
 
     Attributes

@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _core
+from .._equality import ArrayRecord
 from .._excitation import Multisine, period_samples
 from .._experiment import MAX_AUTOMATIC_SETTLE, _lines
 from .._linear import settle_periods_for
@@ -23,8 +24,8 @@ from ._rig import TwoAxisRig
 SIGNS = np.array([[1.0, 1.0], [1.0, -1.0]])
 
 
-@dataclass(frozen=True)
-class Trace2:
+@dataclass(frozen=True, eq=False)
+class Trace2(ArrayRecord):
     """Recorded channels of one two-axis run, sampled at ``fs``; columns (x, y).
 
     Attributes
@@ -78,8 +79,8 @@ def simulate(rig: TwoAxisRig, controller: ControllerSpec, force: ArrayLike, *, s
     return Trace2(force=recorded, displacement=out[:, :2], current=out[:, 2:], fs=model.fs)
 
 
-@dataclass(frozen=True)
-class Estimate2:
+@dataclass(frozen=True, eq=False)
+class Estimate2(ArrayRecord):
     """2x2 frequency-domain estimate at the excited lines; every matrix has shape (lines, 2, 2).
 
     Attributes

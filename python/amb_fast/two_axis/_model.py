@@ -17,6 +17,7 @@ from typing import Any, Union, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._equality import ArrayRecord
 from .._linear import (
     AnyController,
     StabilityMargin,
@@ -194,8 +195,8 @@ def discrete_plant2(rig: TwoAxisRig, fs: float) -> tuple[np.ndarray, np.ndarray,
     return Phi2, Gamma2, names
 
 
-@dataclass(frozen=True)
-class LoopModel:
+@dataclass(frozen=True, eq=False)
+class LoopModel(ArrayRecord):
     """The closed two-axis loop as one discrete state space (sample period ``1/fs``).
 
     ``z[k+1] = M z + Bf f + Bn n``; outputs ``o = C z + Dn n``: the two probe readings (m), then the

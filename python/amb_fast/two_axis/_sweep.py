@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike
 
 from .. import _core
 from .._blas import one_blas_thread
+from .._equality import ArrayRecord
 from .._errors import UnstableLoopError
 from .._excitation import Multisine, schroeder_multisine
 from .._linear import AnyController
@@ -33,8 +34,8 @@ _AXIS_FIELDS = tuple(f.name for f in fields(Rig) if f.name not in ("force_law", 
 _GAINS = ("kp", "ki", "kd", "derivative_cutoff")
 
 
-@dataclass(frozen=True)
-class SweepResult2:
+@dataclass(frozen=True, eq=False)
+class SweepResult2(ArrayRecord):
     """Two-axis estimates over a grid of points, what :func:`sweep` returns; matrices have shape
     (points, lines, 2, 2), in grid order (for ``grid="product"`` the last name varies fastest).
 
