@@ -4,6 +4,7 @@ and on an executor; a point that fails for another reason than instability ends 
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -76,3 +77,30 @@ def test_progress_bar_when_asked_and_the_one_axis_call_takes_the_same_arguments(
     np.testing.assert_array_equal(result.k, quiet.k)
     with pytest.raises(ValueError, match="progress"):
         ta.sweep(rig, af.PID.paper(), sphs, progress="yes", kxy=[0.0])
+
+
+def test_points_at_the_stability_boundary_are_classified_as_run_experiment_does() -> None:
+    """The sweep takes its points' poles in one stack on the core's threads; run_experiment checks one loop
+    with closed_loop_poles. Both are the core's solver (against numpy's LAPACK to 1e-12 of the spectral
+    radius), so points within rounding of the boundary fall on the same side in both."""
+    coupled = ta.TwoAxisRig(x=af.Rig.paper(), y=af.Rig.paper(), kxy=5e3, kyx=-5e3, sensor_angle=0.05)
+    pid = af.PID.paper()
+
+    def radius(kp: float) -> float:
+        return float(np.abs(ta.closed_loop_poles(coupled, replace(pid, kp=kp))).max())
+
+    low, high = 500.0, 2400.0  # unstable, stable
+    assert radius(low) >= 1.0 > radius(high)
+    for _ in range(60):  # bisect to the last digits of kp
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if radius(middle) >= 1.0 else (low, middle)
+    kp = np.array([low, high, *np.nextafter(low, [0.0, np.inf]), *np.nextafter(high, [0.0, np.inf])])
+    sphs = af.schroeder_multisine(f0=20.0, f_max=100.0)
+    result = ta.sweep(coupled, pid, sphs, kp=kp, periods=2, seed=1, progress=False)
+    expected = [radius(k) < 1.0 for k in kp]
+    assert True in expected and False in expected
+    np.testing.assert_array_equal(result.stable, expected)
+    loop = ta.closed_loop(coupled, pid)[0]
+    ours, theirs = ta.closed_loop_poles(coupled, pid), np.linalg.eigvals(loop)
+    gap = np.abs(theirs[:, None] - ours[None, :]).min(axis=1)
+    assert gap.max() <= 1e-12 * np.abs(theirs).max()

@@ -28,6 +28,7 @@ from ._linear_loop import (
 )
 from ._linear_poles import (
     _closed_loop_stacks,
+    _eigenvalues,
     _gain_arrays,
     _unstable_error,
     closed_loop_poles,
@@ -53,6 +54,7 @@ from ._linear_response import (
 __all__ = [
     "_closed_loop_stacks",
     "_dead_time_columns",
+    "_eigenvalues",
     "_gain_arrays",
     "_plant_responses",
     "_response",

@@ -42,9 +42,11 @@ def loop_poles(rig: Rig, controller: AnyController) -> np.ndarray:
 
 def _eigenvalues(stack: np.ndarray, workers: int = 1) -> np.ndarray:
     """Eigenvalues of a stack of square matrices (count, m, m), in the core on up to ``workers`` threads
-    (one per 128 matrices: starting a thread costs about fifty 7x7 solves): one function for single runs
-    and sweeps, so both see the same digits."""
-    return _core.eigenvalues(np.ascontiguousarray(stack, dtype=float), max(1, min(workers, len(stack) // 128)))
+    (one per 128 matrices of 7x7, the work growing as m^3: starting a thread costs about fifty 7x7
+    solves): one function for single runs and sweeps, so both see the same digits."""
+    stack = np.ascontiguousarray(stack, dtype=float)
+    work = len(stack) * (stack.shape[-1] / 7) ** 3 if stack.ndim == 3 else 0.0
+    return _core.eigenvalues(stack, max(1, min(workers, int(work // 128))))
 
 
 @functools.lru_cache(maxsize=256)

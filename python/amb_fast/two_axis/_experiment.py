@@ -256,13 +256,15 @@ def run_experiment(
 
 def _point_args(
     rig: TwoAxisRig, controller: ControllerSpec, excitation: Multisine, settle_periods: int | None, seed: int | None,
-    start: str,
+    start: str, poles: np.ndarray | None = None,
 ) -> tuple[dict[str, np.ndarray], int, list[int]]:  # fmt: skip
     """What the core needs of one experiment pair (run_experiment, a sweep's point): the loop's model, the
-    settle periods and both experiments' seeds; :class:`UnstableLoopError` for an unstable loop."""
+    settle periods and both experiments' seeds; :class:`UnstableLoopError` for an unstable loop. ``poles``:
+    the loop's, where already computed (and found stable) as :func:`require_stable` computes them."""
     spec = controller_matrix(controller)
     require(excitation.fs == spec.fs, "excitation.fs", excitation.fs, f"equal to the controller's fs ({spec.fs} Hz)")
-    poles = require_stable(rig, spec)
+    if poles is None:
+        poles = require_stable(rig, spec)
     if settle_periods is None:
         settle_periods = 0 if start == "steady" else _settle(rig, spec.fs, poles, excitation.period_samples)
     settle = integer("settle_periods", settle_periods, 0)

@@ -22,6 +22,7 @@ from .._linear import (
     AnyController,
     StabilityMargin,
     _dead_time_columns,
+    _eigenvalues,
     _response,
     _unstable_error,
     _zoh,
@@ -33,6 +34,7 @@ from .._linear import (
     split_dead_time,
     transducer_response,
 )
+from .._params import Rig
 from .._validate import require
 from ._rig import TwoAxisRig
 
@@ -122,12 +124,21 @@ def _mimo_controller(controller: ControllerMatrix) -> tuple[np.ndarray, np.ndarr
     return A, B, C, D
 
 
+@functools.lru_cache(maxsize=64)
+def _axis_plant(axis: Rig) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """:func:`plant_matrices` of one axis, once per distinct axis (a sweep of the coupling keeps both);
+    read-only."""
+    A, B, states = plant_matrices(axis)
+    A.flags.writeable = B.flags.writeable = False
+    return A, B, tuple(states)
+
+
 def plant_matrices2(rig: TwoAxisRig) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """Continuous ``A``, ``B`` of the coupled plant; inputs ``(fx, fy, ux, uy)`` (N, N, A, A).
 
     States: axis x's (``x.y, x.v, ...``), then axis y's, named ``"x.<state>"``, ``"y.<state>"``.
     """
-    parts = [plant_matrices(axis) for axis in rig.axes]
+    parts = [_axis_plant(axis) for axis in rig.axes]
     states = [f"{name}.{s}" for name, (_, _, st) in zip("xy", parts) for s in st]
     A = _block_diag(parts[0][0], parts[1][0])
     n0 = parts[0][0].shape[0]
@@ -259,8 +270,9 @@ def closed_loop(rig: TwoAxisRig, controller: ControllerSpec) -> tuple[np.ndarray
 
 
 def closed_loop_poles(rig: TwoAxisRig, controller: ControllerSpec) -> np.ndarray:
-    """Poles of the linearised two-axis sampled-data loop in the z-plane (stable: all ``|z| < 1``)."""
-    return np.linalg.eigvals(loop_model(rig, controller).M)
+    """Poles of the linearised two-axis sampled-data loop in the z-plane (stable: all ``|z| < 1``), from
+    the core's eigenvalue solver, as for one axis (a sweep checks its points with the same numbers)."""
+    return _eigenvalues(loop_model(rig, controller).M[None])[0]
 
 
 def require_stable(rig: TwoAxisRig, controller: ControllerSpec) -> np.ndarray:

@@ -19,14 +19,21 @@ from .._blas import one_blas_thread
 from .._equality import ArrayRecord
 from .._errors import UnstableLoopError
 from .._excitation import Multisine, schroeder_multisine
-from .._linear import AnyController
+from .._linear import AnyController, _eigenvalues
 from .._params import PID, Rig
 from .._sweep import _grid, _progress_bar, point_seeds, points_per_call
 from .._validate import integer, require, seed_value
 from ..io._atomic import atomic_write
 from ..plots import _pyplot, _tight_layout
 from ._experiment import Estimate2, _core_pair, _point_args, _window, coefficients2, run_experiment
-from ._model import ControllerMatrix, ControllerSpec, controller_matrix, effective_coefficients, stability_margin
+from ._model import (
+    ControllerMatrix,
+    ControllerSpec,
+    controller_matrix,
+    effective_coefficients,
+    loop_model,
+    stability_margin,
+)
 from ._rig import TwoAxisRig
 
 _RIG_FIELDS = ("kxy", "kyx", "cxy", "cyx", "sensor_angle")
@@ -178,7 +185,7 @@ def sweep(
             freq = excitation.harmonics * excitation.f0  # as run_experiment computes them, to the bit
             for first in range(0, count, size):
                 rows = np.arange(first, min(first + size, count))
-                prepared = [_prepared(model(i), excitation, settle_periods, int(seeds[i]), start) for i in rows]
+                prepared = _prepared([model(i) for i in rows], excitation, settle_periods, seeds[rows], start, threads)
                 ran = rows[[p is not None for p in prepared]]
                 stable[ran] = True
                 given = [p for p in prepared if p is not None]
@@ -198,13 +205,23 @@ def sweep(
 
 
 def _prepared(
-    model: tuple[TwoAxisRig, Any], excitation: Multisine, settle_periods: int | None, seed: int, start: str
-) -> tuple | None:
-    """A point's core arguments (two_axis.run_experiment's), or None where its loop is unstable."""
-    try:
-        return _point_args(*model, excitation, settle_periods, seed, start)
-    except UnstableLoopError:
-        return None
+    models: list[tuple[TwoAxisRig, Any]], excitation: Multisine, settle_periods: int | None, seeds: np.ndarray,
+    start: str, workers: int,
+) -> list[tuple | None]:  # fmt: skip
+    """The points' core arguments (two_axis.run_experiment's), None where a loop is unstable. The loops are
+    built here; their poles come from the core on ``workers`` threads, a stack per loop size, the numbers
+    with which run_experiment checks a loop."""
+    loops = [loop_model(*model) for model in models]
+    poles: list[np.ndarray] = [np.empty(0)] * len(models)
+    sizes: dict[int, list[int]] = {}
+    for j, loop in enumerate(loops):
+        sizes.setdefault(loop.M.shape[0], []).append(j)
+    for same in sizes.values():
+        for j, eigenvalues in zip(same, _eigenvalues(np.stack([loops[j].M for j in same]), workers)):
+            poles[j] = eigenvalues
+    stable = [not np.any(np.abs(p) >= 1.0) for p in poles]  # require_stable's test
+    return [_point_args(*model, excitation, settle_periods, int(seed), start, p) if ok else None
+            for model, seed, p, ok in zip(models, seeds, poles, stable)]  # fmt: skip
 
 
 def _point(model: tuple[TwoAxisRig, Any], seed: int, **options: Any) -> Estimate2 | None:
