@@ -27,10 +27,12 @@ from ._linear_loop import (
     state_space,
 )
 from ._linear_poles import (
+    _checked_poles,
     _closed_loop_stacks,
     _eigenvalues,
     _gain_arrays,
     _unstable_error,
+    _unstable_poles,
     closed_loop_poles,
     loop_poles,
     require_stable,
@@ -52,10 +54,12 @@ from ._linear_response import (
 )
 
 __all__ = [
+    "_checked_poles",
     "_closed_loop_stacks",
     "_dead_time_columns",
     "_eigenvalues",
     "_gain_arrays",
+    "_unstable_poles",
     "_plant_responses",
     "_response",
     "_unstable_error",

@@ -6,6 +6,7 @@ and the settling time the poles set.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -53,16 +54,30 @@ def _eigenvalues(stack: np.ndarray, workers: int = 1) -> np.ndarray:
 def require_stable(rig: Rig, controller: AnyController) -> np.ndarray:
     """The closed-loop poles (as :func:`loop_poles` computes them, read-only), or
     :class:`UnstableLoopError` naming the unstable ones and the controller."""
-    poles = loop_poles(rig, controller)
-    poles.flags.writeable = False
-    bad = poles[np.abs(poles) >= 1.0]
-    if bad.size:
+
+    def loop() -> str:
         if isinstance(controller, PID):
             what = (f"kp={controller.kp} A/m, ki={controller.ki} A/(m s), kd={controller.kd} A s/m, "
                     f"delay={controller.delay}")  # fmt: skip
         else:
             what = repr(controller)
-        raise _unstable_error(f"the closed loop is unstable with {what}", bad)
+        return f"the closed loop is unstable with {what}"
+
+    return _checked_poles(loop_poles(rig, controller), loop)
+
+
+def _unstable_poles(poles: np.ndarray) -> np.ndarray:
+    """The poles on or outside the unit circle: the one test of stability of runs and sweeps, one axis or two."""
+    return poles[np.abs(poles) >= 1.0]
+
+
+def _checked_poles(poles: np.ndarray, loop: Callable[[], str]) -> np.ndarray:
+    """``poles``, made read-only, or :class:`UnstableLoopError` naming the unstable ones after ``loop()``
+    ("the closed loop is unstable with ...")."""
+    poles.flags.writeable = False
+    bad = _unstable_poles(poles)
+    if bad.size:
+        raise _unstable_error(loop(), bad)
     return poles
 
 

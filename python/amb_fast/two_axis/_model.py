@@ -21,10 +21,10 @@ from .._equality import ArrayRecord
 from .._linear import (
     AnyController,
     StabilityMargin,
+    _checked_poles,
     _dead_time_columns,
     _eigenvalues,
     _response,
-    _unstable_error,
     _zoh,
     controller_matrices,
     controller_response,
@@ -282,12 +282,7 @@ def require_stable(rig: TwoAxisRig, controller: ControllerSpec) -> np.ndarray:
 
 @functools.lru_cache(maxsize=64)
 def _require_stable(rig: TwoAxisRig, controller: ControllerMatrix) -> np.ndarray:
-    poles = closed_loop_poles(rig, controller)
-    poles.flags.writeable = False
-    bad = poles[np.abs(poles) >= 1.0]
-    if bad.size:
-        raise _unstable_error("the two-axis closed loop is unstable", bad)
-    return poles
+    return _checked_poles(closed_loop_poles(rig, controller), lambda: "the two-axis closed loop is unstable")
 
 
 def _frequencies(freq: ArrayLike, fs: float) -> np.ndarray:
@@ -328,7 +323,7 @@ def sensitivity(rig: TwoAxisRig, controller: ControllerSpec, freq: ArrayLike) ->
 
 
 @dataclass(frozen=True)
-class StabilityMargin2:
+class StabilityMargin2(StabilityMargin):
     """Peak sensitivity of the two-axis loop: MIMO (largest singular value) and per axis (ISO 14839-3).
 
     Attributes
@@ -340,11 +335,6 @@ class StabilityMargin2:
         other closed).
     """
 
-    peak: float
-    peak_db: float
-    frequency: float
-    zone: str
-    stable: bool
     x: StabilityMargin
     y: StabilityMargin
 

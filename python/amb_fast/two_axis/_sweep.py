@@ -19,7 +19,7 @@ from .._blas import one_blas_thread
 from .._equality import ArrayRecord
 from .._errors import UnstableLoopError
 from .._excitation import Multisine, schroeder_multisine
-from .._linear import AnyController, _eigenvalues
+from .._linear import AnyController, _eigenvalues, _unstable_poles
 from .._params import PID, Rig
 from .._sweep import _grid, _progress_bar, point_seeds, points_per_call
 from .._validate import integer, require, seed_value
@@ -219,7 +219,7 @@ def _prepared(
     for same in sizes.values():
         for j, eigenvalues in zip(same, _eigenvalues(np.stack([loops[j].M for j in same]), workers)):
             poles[j] = eigenvalues
-    stable = [not np.any(np.abs(p) >= 1.0) for p in poles]  # require_stable's test
+    stable = [not _unstable_poles(p).size for p in poles]  # require_stable's test
     return [_point_args(*model, excitation, settle_periods, int(seed), start, p) if ok else None
             for model, seed, p, ok in zip(models, seeds, poles, stable)]  # fmt: skip
 
