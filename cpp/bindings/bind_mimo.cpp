@@ -96,9 +96,11 @@ void bind_mimo(py::module_& m) {
         py::arg("M"), py::arg("Bf"), py::arg("Bn"), py::arg("C"), py::arg("Dn"), py::arg("transducer_pole"),
         py::arg("sensor_noise"), py::arg("force_noise"), py::arg("period_forces"), py::arg("settle_periods"),
         py::arg("periods"), py::arg("seeds"), py::arg("steady_start") = true, py::arg("all_forces") = true,
-        "Experiments with the dense MIMO loop in lock step, one per seed (1 or 2): period_forces[k] (period, p) repeated for "
+        "Experiments with the dense MIMO loop in lock step, one per seed (1 or 2): period_forces[k] (period, p) "
+        "repeated for "
         "settle_periods + periods from rest or the periodic steady state; returns the recorded forces "
-        "(experiments, p, periods * period; only the first period, (experiments, p, period), with all_forces=False) and "
+        "(experiments, p, periods * period; only the first period, (experiments, p, period), with all_forces=False) "
+        "and "
         "measured displacements (experiments, q, periods * period).");
     m.def(
         "mimo_line_experiments",
@@ -175,8 +177,8 @@ void bind_mimo(py::module_& m) {
             std::vector<MimoModel> models;
             std::vector<std::array<std::uint64_t, 2>> pairs;
             for (std::size_t k = 0; k < n; ++k) {
-                models.push_back(model_of(M[k], Bf[k], Bn[k], C[k], Dn[k], transducer_pole[k], sensor_noise[k],
-                                          force_noise[k]));
+                models.push_back(
+                    model_of(M[k], Bf[k], Bn[k], C[k], Dn[k], transducer_pole[k], sensor_noise[k], force_noise[k]));
                 if (models.back().forces() != 2 || models.back().probes() != 2)
                     throw std::invalid_argument("mimo_line_sweep: every model has two forces and two probes");
                 pairs.push_back({seeds.at(k, 0), seeds.at(k, 1)});

@@ -13,11 +13,23 @@ void bind_params(py::module_& m) {
         .def(py::init([](double mass, double kyy, double kiy, double bias_current, ForceLaw force_law,
                          std::optional<double> amp_bandwidth, std::optional<double> eddy_bandwidth,
                          std::optional<double> sensor_bandwidth, int substeps, double sensor_noise, double force_noise,
-                         double mass_loading, std::optional<double> force_coupling_tau,
-                         std::optional<double> clearance, std::optional<double> current_limit, double dead_time) {
-                 Rig rig{mass,          kyy,         kiy,          bias_current,      force_law,
-                         amp_bandwidth, eddy_bandwidth, sensor_bandwidth, substeps, sensor_noise,
-                         force_noise,   mass_loading, force_coupling_tau, clearance, current_limit,
+                         double mass_loading, std::optional<double> force_coupling_tau, std::optional<double> clearance,
+                         std::optional<double> current_limit, double dead_time) {
+                 Rig rig{mass,
+                         kyy,
+                         kiy,
+                         bias_current,
+                         force_law,
+                         amp_bandwidth,
+                         eddy_bandwidth,
+                         sensor_bandwidth,
+                         substeps,
+                         sensor_noise,
+                         force_noise,
+                         mass_loading,
+                         force_coupling_tau,
+                         clearance,
+                         current_limit,
                          dead_time};
                  rig.validate();
                  return rig;
@@ -26,8 +38,7 @@ void bind_params(py::module_& m) {
              py::arg("force_law"), py::arg("amp_bandwidth"), py::arg("eddy_bandwidth"), py::arg("sensor_bandwidth"),
              py::arg("substeps"), py::arg("sensor_noise") = 0.0, py::arg("force_noise") = 0.0,
              py::arg("mass_loading") = 0.0, py::arg("force_coupling_tau") = std::nullopt,
-             py::arg("clearance") = std::nullopt, py::arg("current_limit") = std::nullopt,
-             py::arg("dead_time") = 0.0)
+             py::arg("clearance") = std::nullopt, py::arg("current_limit") = std::nullopt, py::arg("dead_time") = 0.0)
         .def("magnet_force", &Rig::magnet_force, py::arg("y"), py::arg("i"),
              "Non-linear magnet-pair force on the platform (N) at displacement y (m) and current i (A).")
         .def_property_readonly("gap", &Rig::gap, "Nominal air gap of the force law (m).");
@@ -57,7 +68,8 @@ void bind_params(py::module_& m) {
            const Eigen::VectorXd& ki, const Eigen::VectorXd& kd, double pole, double fs, int delay) {
             const Eigen::Index count = direct.size();
             for (const auto* v : {&integral_in, &derivative_out, &ki, &kd})
-                if (v->size() != count) throw std::invalid_argument("pid_controllers: one entry per point in every array");
+                if (v->size() != count)
+                    throw std::invalid_argument("pid_controllers: one entry per point in every array");
             std::vector<Controller> out;
             out.reserve(static_cast<std::size_t>(count));
             for (Eigen::Index j = 0; j < count; ++j) {
@@ -72,8 +84,8 @@ void bind_params(py::module_& m) {
             }
             return out;
         },
-        py::arg("integral_in"), py::arg("derivative_out"), py::arg("direct"), py::arg("ki"), py::arg("kd"), py::arg("pole"),
-        py::arg("fs"), py::arg("delay"),
+        py::arg("integral_in"), py::arg("derivative_out"), py::arg("direct"), py::arg("ki"), py::arg("kd"),
+        py::arg("pole"), py::arg("fs"), py::arg("delay"),
         "A digital PID's controllers in modal form (amb_fast.PID.state_space), one per entry of the arrays of its "
         "terms: the integral's state (pole 1, input integral_in) where ki != 0, then the derivative's (pole `pole`, "
         "output derivative_out) where kd != 0, direct term `direct`.");

@@ -10,7 +10,8 @@ using InputArray = py::array_t<double, py::array::c_style | py::array::forcecast
 
 void bind_spectrum(py::module_& m) {
     py::class_<LinePlan>(m, "LinePlan", "Period length (samples) and the harmonic numbers of excited/unexcited lines.")
-        .def(py::init([](Eigen::Index period, const Eigen::Ref<const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>>& excited,
+        .def(py::init([](Eigen::Index period,
+                         const Eigen::Ref<const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>>& excited,
                          const Eigen::Ref<const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>>& unexcited) {
                  LinePlan plan{period, {excited.begin(), excited.end()}, {unexcited.begin(), unexcited.end()}, 1};
                  plan.validate();
@@ -42,10 +43,10 @@ void bind_spectrum(py::module_& m) {
                 throw std::invalid_argument("window must be an odd number >= 1, got " + std::to_string(window));
             const auto n = static_cast<Eigen::Index>(x.shape(0)), columns = static_cast<Eigen::Index>(x.shape(1));
             py::array_t<double> out({n, columns});
-            const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> in(x.data(), n,
-                                                                                                           columns);
+            const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> in(
+                x.data(), n, columns);
             Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> to(out.mutable_data(), n,
-                                                                                                 columns);
+                                                                                                  columns);
             for (Eigen::Index c = 0; c < columns; ++c) to.col(c) = median_filter(in.col(c), window);
             return out;
         },
@@ -84,13 +85,13 @@ void bind_spectrum(py::module_& m) {
            Eigen::Index settle_periods, Eigen::Index periods, const LinePlan& plan, std::uint64_t seed,
            int median_window, bool steady_start) {
             return interruptible([&] {
-                return run_experiment(rig, controller, period_force, settle_periods, periods, plan, seed,
-                                      median_window, steady_start);
+                return run_experiment(rig, controller, period_force, settle_periods, periods, plan, seed, median_window,
+                                      steady_start);
             });
         },
         py::arg("rig"), py::arg("controller"), py::arg("period_force"), py::arg("settle_periods"), py::arg("periods"),
         py::arg("plan"), py::arg("seed"), py::arg("median_window"), py::arg("steady_start") = false,
-          "Simulates settle + periods of the repeated excitation and estimates, keeping no time series.");
+        "Simulates settle + periods of the repeated excitation and estimates, keeping no time series.");
 
     m.def(
         "identify",

@@ -47,8 +47,12 @@ void bind_sweep(py::module_& m) {
             [](SweepEstimates& e) {
                 py::dict out;
                 out["H"] = owned(e.H);
-                for (auto [name, matrix] : {std::pair{"k", &e.k}, {"c", &e.c}, {"k_std", &e.k_std}, {"c_std", &e.c_std},
-                                            {"k_smooth", &e.k_smooth}, {"c_smooth", &e.c_smooth},
+                for (auto [name, matrix] : {std::pair{"k", &e.k},
+                                            {"c", &e.c},
+                                            {"k_std", &e.k_std},
+                                            {"c_std", &e.c_std},
+                                            {"k_smooth", &e.k_smooth},
+                                            {"c_smooth", &e.c_smooth},
                                             {"unexcited_displacement", &e.unexcited_displacement}})
                     out[name] = owned(*matrix);
                 out["status"] = owned(e.status);
@@ -68,7 +72,8 @@ void bind_sweep(py::module_& m) {
            const std::optional<py::array_t<double, py::array::c_style | py::array::forcecast>>& loop_matrices) {
             const auto n = static_cast<Eigen::Index>(controllers.size());
             if (static_cast<Eigen::Index>(rigs.size()) != n || settle_periods.size() != n || seeds.size() != n)
-                throw std::invalid_argument("rigs, controllers, settle_periods and seeds must have one entry per point");
+                throw std::invalid_argument(
+                    "rigs, controllers, settle_periods and seeds must have one entry per point");
             LoopMatrices loops;
             if (loop_matrices) {
                 const auto& a = *loop_matrices;
@@ -82,8 +87,9 @@ void bind_sweep(py::module_& m) {
                 const auto k = static_cast<std::size_t>(g);
                 points.push_back({rigs[k], controllers[k], settle_periods[g], seeds[g]});
             }
-            return interruptible(
-                [&] { return run_sweep(period_force, points, periods, plan, median_window, workers, steady_start, loops); });
+            return interruptible([&] {
+                return run_sweep(period_force, points, periods, plan, median_window, workers, steady_start, loops);
+            });
         },
         py::arg("period_force"), py::arg("rigs"), py::arg("controllers"), py::arg("settle_periods"), py::arg("seeds"),
         py::arg("periods"), py::arg("plan"), py::arg("median_window"), py::arg("workers"),

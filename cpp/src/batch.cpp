@@ -81,8 +81,8 @@ void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* poi
         for (std::size_t g = 0; g < n; ++g) {
             if (p == points[g].settle_periods) saturated_before[g] = loops[g].saturated_samples();
             // A single run stops at touchdown; the lane runs on, but records no more.
-            const bool recording = !loops[g].touched_down() && p >= points[g].settle_periods &&
-                                   p < points[g].settle_periods + periods;
+            const bool recording =
+                !loops[g].touched_down() && p >= points[g].settle_periods && p < points[g].settle_periods + periods;
             if (recording) estimators[g].add_period(force[g].data(), displacement[g].data(), p * L);
         }
     }
@@ -99,8 +99,8 @@ void run_linear_group(const Eigen::VectorXd& period_force, const SweepPoint* poi
 }
 
 void run_points(const Eigen::VectorXd& period_force, const SweepPoint* points, Eigen::Index count, Eigen::Index periods,
-                const LinePlan& plan, int median_window, bool steady_start, SweepEstimates& out,
-                Eigen::Index first_row, std::optional<Workspace>& work) {  // work: made when the first group comes
+                const LinePlan& plan, int median_window, bool steady_start, SweepEstimates& out, Eigen::Index first_row,
+                std::optional<Workspace>& work) {  // work: made when the first group comes
     Eigen::Index start = 0;
     while (start < count) {
         const SweepPoint& head = points[start];
@@ -171,7 +171,8 @@ SweepEstimates run_sweep(const Eigen::Ref<const Eigen::VectorXd>& period_force, 
     const double nan = std::numeric_limits<double>::quiet_NaN();
     SweepEstimates out;
     out.H.setConstant(n, lines, {nan, nan});
-    for (auto* m : {&out.k, &out.c, &out.k_std, &out.c_std, &out.k_smooth, &out.c_smooth}) m->setConstant(n, lines, nan);
+    for (auto* m : {&out.k, &out.c, &out.k_std, &out.c_std, &out.k_smooth, &out.c_smooth})
+        m->setConstant(n, lines, nan);
     out.unexcited_displacement.setConstant(n, gaps, nan);
     out.status.setConstant(n, static_cast<int>(PointStatus::ok));
     out.periods = periods;

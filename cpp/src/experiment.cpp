@@ -31,9 +31,10 @@ LineEstimate drawn_experiment(const Rig& rig, const Controller& controller, cons
 }
 }  // namespace
 
-LineEstimate run_experiment(const Rig& rig, const Controller& controller, const Eigen::Ref<const Eigen::VectorXd>& period_force,
-                            Eigen::Index settle_periods, Eigen::Index periods, LinePlan plan, std::uint64_t seed,
-                            int median_window, bool steady_start) {
+LineEstimate run_experiment(const Rig& rig, const Controller& controller,
+                            const Eigen::Ref<const Eigen::VectorXd>& period_force, Eigen::Index settle_periods,
+                            Eigen::Index periods, LinePlan plan, std::uint64_t seed, int median_window,
+                            bool steady_start) {
     const Eigen::Index L = plan.period;
     require(period_force.size() == L, "excitation length", period_force.size(), "one period of plan.period samples");
     require_finite_samples("excitation", period_force.data(), L);
@@ -41,7 +42,8 @@ LineEstimate run_experiment(const Rig& rig, const Controller& controller, const 
     require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
     plan.periods_per_block = periods_per_block(periods);
     if (draws_spectra(rig, steady_start))
-        return drawn_experiment(rig, controller, period_force.data(), settle_periods, periods, plan, seed, median_window);
+        return drawn_experiment(rig, controller, period_force.data(), settle_periods, periods, plan, seed,
+                                median_window);
     Loop loop(rig, controller, seed);
     if (steady_start) loop.start_periodic(period_force.data(), L);
     PeriodEstimator estimator(plan);

@@ -26,11 +26,11 @@ struct Shifted {
     double& operator[](int l) { return v[l]; }
     double operator[](int l) const { return v[l]; }
 };
-#define AMB_FAST_LANEWISE(op)                                                       \
-    inline Shifted operator op(const Shifted& a, const Shifted& b) {              \
-        Shifted c;                                                                 \
-        for (int l = 0; l < K; ++l) c[l] = a[l] op b[l];                           \
-        return c;                                                                  \
+#define AMB_FAST_LANEWISE(op)                                        \
+    inline Shifted operator op(const Shifted& a, const Shifted& b) { \
+        Shifted c;                                                   \
+        for (int l = 0; l < K; ++l) c[l] = a[l] op b[l];             \
+        return c;                                                    \
     }
 AMB_FAST_LANEWISE(+)
 AMB_FAST_LANEWISE(-)
@@ -60,8 +60,8 @@ AMB_FAST_ALWAYS_INLINE Shifted broadcast(double x) {
 }
 
 // a -= m b, complex, lane by lane (real and imaginary parts apart), a at a_r, a_i.
-AMB_FAST_ALWAYS_INLINE void subtract_product(double* a_r, double* a_i, const Shifted& mr, const Shifted& mi, const Shifted& br,
-                                             const Shifted& bi) {
+AMB_FAST_ALWAYS_INLINE void subtract_product(double* a_r, double* a_i, const Shifted& mr, const Shifted& mi,
+                                             const Shifted& br, const Shifted& bi) {
     store(a_r, load(a_r) - (mr * br - mi * bi));
     store(a_i, load(a_i) - (mr * bi + mi * br));
 }
@@ -121,7 +121,8 @@ AMB_FAST_ALWAYS_INLINE bool factor_kernel(const Factors& f, const cd* z) {
             bool any = false;
             for (int l = 0; l < K; ++l) any = any || swap[l] != 0.0;
             if (any)
-                for (Eigen::Index c = j; c < n; ++c) exchange_where(swap, U_r(j, c), U_i(j, c), U_r(j + 1, c), U_i(j + 1, c));
+                for (Eigen::Index c = j; c < n; ++c)
+                    exchange_where(swap, U_r(j, c), U_i(j, c), U_r(j + 1, c), U_i(j + 1, c));
         }
         // 1 / x = conj(x) / |x|^2 (a pivot of a well-conditioned matrix: no scaling)
         const Shifted a = load(U_r(j, j)), b = load(U_i(j, j)), norm = a * a + b * b;
@@ -137,7 +138,8 @@ AMB_FAST_ALWAYS_INLINE bool factor_kernel(const Factors& f, const cd* z) {
         store(f.mi + j * K, m_i);
         store(U_r(j + 1, j), zero);
         store(U_i(j + 1, j), zero);
-        for (Eigen::Index c = j + 1; c < n; ++c) subtract_product(U_r(j + 1, c), U_i(j + 1, c), m_r, m_i, load(U_r(j, c)), load(U_i(j, c)));
+        for (Eigen::Index c = j + 1; c < n; ++c)
+            subtract_product(U_r(j + 1, c), U_i(j + 1, c), m_r, m_i, load(U_r(j, c)), load(U_i(j, c)));
     }
     return true;
 }
@@ -187,7 +189,9 @@ void solve_portable(const ConstFactors& f, double* re, double* im) { solve_kerne
 void solve_transposed_portable(const ConstFactors& f, double* re, double* im) { solve_transposed_kernel(f, re, im); }
 #if AMB_FAST_WIDE_LANES
 __attribute__((target("avx2"))) bool factor_avx2(const Factors& f, const cd* z) { return factor_kernel(f, z); }
-__attribute__((target("avx2"))) void solve_avx2(const ConstFactors& f, double* re, double* im) { solve_kernel(f, re, im); }
+__attribute__((target("avx2"))) void solve_avx2(const ConstFactors& f, double* re, double* im) {
+    solve_kernel(f, re, im);
+}
 __attribute__((target("avx2"))) void solve_transposed_avx2(const ConstFactors& f, double* re, double* im) {
     solve_transposed_kernel(f, re, im);
 }
@@ -210,18 +214,27 @@ HessenbergLU::HessenbergLU(const Eigen::MatrixXd& H)
       swapped_(dr_.size()) {}
 
 void HessenbergLU::factor(const cd* z) {
-    const Factors f{n_, H_.data(), ur_.data(), ui_.data(), dr_.data(), di_.data(), mr_.data(), mi_.data(), swapped_.data()};
+    // clang-format off: a list, not a table
+    const Factors f{n_, H_.data(), ur_.data(), ui_.data(), dr_.data(), di_.data(), mr_.data(), mi_.data(),
+                    swapped_.data()};
+    // clang-format on
     if (!(simd_avx2() ? factor_avx2 : factor_portable)(f, z))
         throw std::invalid_argument("zI - H is singular: z is a pole of the loop");
 }
 
 void HessenbergLU::solve(double* re, double* im) const {
-    const ConstFactors f{n_, H_.data(), ur_.data(), ui_.data(), dr_.data(), di_.data(), mr_.data(), mi_.data(), swapped_.data()};
+    // clang-format off: a list, not a table
+    const ConstFactors f{n_, H_.data(), ur_.data(), ui_.data(), dr_.data(), di_.data(), mr_.data(), mi_.data(),
+                         swapped_.data()};
+    // clang-format on
     (simd_avx2() ? solve_avx2 : solve_portable)(f, re, im);
 }
 
 void HessenbergLU::solve_transposed(double* re, double* im) const {
-    const ConstFactors f{n_, H_.data(), ur_.data(), ui_.data(), dr_.data(), di_.data(), mr_.data(), mi_.data(), swapped_.data()};
+    // clang-format off: a list, not a table
+    const ConstFactors f{n_, H_.data(), ur_.data(), ui_.data(), dr_.data(), di_.data(), mr_.data(), mi_.data(),
+                         swapped_.data()};
+    // clang-format on
     (simd_avx2() ? solve_transposed_avx2 : solve_transposed_portable)(f, re, im);
 }
 

@@ -43,9 +43,7 @@ template <typename Get>
 void pick_bins(const std::vector<Eigen::Index>& bins, std::size_t L, Get value, std::complex<double>* lines) {
     for (std::size_t j = 0; j < bins.size(); ++j) {
         const auto b = static_cast<std::size_t>(bins[j]);
-        lines[j] = b == 0       ? cd(value(0), 0.0)
-                   : 2 * b == L ? cd(value(L - 1), 0.0)
-                                : cd(value(2 * b - 1), value(2 * b));
+        lines[j] = b == 0 ? cd(value(0), 0.0) : 2 * b == L ? cd(value(L - 1), 0.0) : cd(value(2 * b - 1), value(2 * b));
     }
 }
 
@@ -75,8 +73,8 @@ LineTransform::LineTransform(Eigen::Index period, std::vector<Eigen::Index> bins
     require(L_ >= 1, "period", L_, "at least 1 sample");
     for (Eigen::Index b : bins_) require(b >= 0 && 2 * b <= L_, "bin", b, "between 0 and period/2");
     if (method_ == Method::automatic)
-        method_ = direct_cost(L_, static_cast<Eigen::Index>(bins_.size())) < fft_cost(L_) ? Method::direct
-                                                                                          : Method::fft;
+        method_ =
+            direct_cost(L_, static_cast<Eigen::Index>(bins_.size())) < fft_cost(L_) ? Method::direct : Method::fft;
     if (method_ == Method::fft) {
         plan_ = real_plan(L_);  // the work buffers come with the first transform (an estimator fed
                                 // spectra never transforms)

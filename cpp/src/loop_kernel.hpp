@@ -118,7 +118,8 @@ struct LoopState {
         set_lane(x.y, g, z[state::y]), set_lane(x.v, g, z[state::v]), set_lane(x.i, g, z[state::i]);
         set_lane(x.f, g, z[state::i_f]), set_lane(x.s_ys, g, z[state::ys]), set_lane(x.u_prev, g, loop.u_prev_);
         for (int r = 0; r < N; ++r) set_lane(x.s[static_cast<std::size_t>(r)], g, loop.controller_.state()[r]);
-        for (std::size_t j = 0; j < x.line.size(); ++j) set_lane(x.line[j], g, loop.controller_.line(static_cast<int>(j)));
+        for (std::size_t j = 0; j < x.line.size(); ++j)
+            set_lane(x.line[j], g, loop.controller_.line(static_cast<int>(j)));
         x.head = 0;
     }
     template <class T, int N>
@@ -127,7 +128,8 @@ struct LoopState {
         loop.u_prev_ = get_lane(x.u_prev, g);
         for (int r = 0; r < N; ++r) loop.controller_.state()[r] = get_lane(x.s[static_cast<std::size_t>(r)], g);
         const std::size_t d = x.line.size();
-        for (std::size_t j = 0; j < d; ++j) loop.controller_.set_line(static_cast<int>(j), get_lane(x.line[(x.head + j) % d], g));
+        for (std::size_t j = 0; j < d; ++j)
+            loop.controller_.set_line(static_cast<int>(j), get_lane(x.line[(x.head + j) % d], g));
     }
 };
 

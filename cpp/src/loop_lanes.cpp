@@ -89,10 +89,8 @@ void Loop::run_side_by_side(Loop* const* loops, int count, const double* force, 
         return;
     }
 #if AMB_FAST_LANES_OK
-    if (lanes == wide_lanes)
-        run_lanes<wide_lanes>(loops, count, force, n, out);
-    else
-        run_lanes<loop_lanes>(loops, count, force, n, out);
+    if (lanes == wide_lanes) run_lanes<wide_lanes>(loops, count, force, n, out);
+    else run_lanes<loop_lanes>(loops, count, force, n, out);
 #endif
 }
 
@@ -103,7 +101,8 @@ void Loop::run_lanes(Loop* const* loops, int count, const double* force, Eigen::
     Loop& head = *loops[0];
     const Rig& rig = head.rig_;
     const CascadeMap& scalar_map = *head.map_;
-    alignas(sizeof(V)) const auto map = scalar_map.broadcast<V>([](V& lanes, double value) { lane_fill(lanes, value); });
+    alignas(sizeof(V)) const auto map =
+        scalar_map.broadcast<V>([](V& lanes, double value) { lane_fill(lanes, value); });
     const auto lanes = static_cast<std::size_t>(K);
     LaneArray<V> noise(chunk), displacement(chunk), current(chunk), force_noise(chunk);
     std::array<NormalStream*, K> sensor_streams{}, force_streams{};
@@ -136,10 +135,10 @@ void Loop::run_lanes(Loop* const* loops, int count, const double* force, Eigen::
             alignas(sizeof(V)) Watch<V> watch;
             with_loop_shape(head.sensed_ == state::ys, head.has_amp_, head.checked(), scalar_map.fractional,
                             [&](auto sensed, auto amp, auto check, auto frac) {
-                                LaneKernel<K, n_, decltype(sensed)::value, decltype(amp)::value,
-                                           decltype(check)::value, decltype(frac)::value>::run(
-                                    map, law, x, force + start, m, noise.data(), displacement.data(), current.data(),
-                                    head.limit_, watch, head);
+                                LaneKernel<K, n_, decltype(sensed)::value, decltype(amp)::value, decltype(check)::value,
+                                           decltype(frac)::value>::run(map, law, x, force + start, m, noise.data(),
+                                                                       displacement.data(), current.data(), head.limit_,
+                                                                       watch, head);
                             });
             for (int g = 0; g < count; ++g) {
                 Loop& lp = *loops[g];

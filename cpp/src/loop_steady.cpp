@@ -47,13 +47,16 @@ Loop Loop::periodic_probe() const {
 }
 
 void Loop::start_periodic_from(const Loop& probe, Eigen::Index L) {
-    const ClosedLoopMap map(plant_ ? *plant_ : sample_map(probe.rig_, T_), sensed_, controller_.controller(), fraction_);
+    const ClosedLoopMap map(plant_ ? *plant_ : sample_map(probe.rig_, T_), sensed_, controller_.controller(),
+                            fraction_);
     Eigen::VectorXd z = periodic_start(map.M, L, probe.stacked_state());
     if (rig_.sensor_noise > 0.0) {
         NormalStream draws(start_noise_seed(seed_));
         Eigen::VectorXd w(z.size());
         draws.fill(w.data(), w.size(), 1.0);
-        z += covariance_root(stationary_covariance(map.M, map.noise_in, Eigen::VectorXd::Constant(1, rig_.sensor_noise))) * w;
+        z += covariance_root(
+                 stationary_covariance(map.M, map.noise_in, Eigen::VectorXd::Constant(1, rig_.sensor_noise))) *
+             w;
     }
     set_stacked_state(z);
     transducer_.set_state(periodic_transducer_start(transducer_.pole(), L, probe.transducer_.state()));

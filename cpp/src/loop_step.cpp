@@ -58,16 +58,19 @@ void Loop::run_linear(const double* force, Eigen::Index n, Channels out, const d
             local.emplace(force_rng_);
             draws = {&*local, rig_.force_noise, force_noise};
         }
-        with_loop_shape(sensed_ == state::ys, has_amp_, checked(), map.fractional, [&](auto sensed, auto amp, auto check, auto frac) {
-            constexpr int sensed_ = decltype(sensed)::value;
-            constexpr bool amp_ = decltype(amp)::value, check_ = decltype(check)::value, frac_ = decltype(frac)::value;
-            if (local)
-                run_samples<double, n_, sensed_, amp_, check_, frac_, CascadeMap, true>(
-                    map, law, x, force, n, noise, out.displacement, out.current, limit_, watch, *this, k_, draws);
-            else
-                run_samples<double, n_, sensed_, amp_, check_, frac_>(map, law, x, force, n, noise, out.displacement,
-                                                                      out.current, limit_, watch, *this, k_);
-        });
+        with_loop_shape(
+            sensed_ == state::ys, has_amp_, checked(), map.fractional,
+            [&](auto sensed, auto amp, auto check, auto frac) {
+                constexpr int sensed_ = decltype(sensed)::value;
+                constexpr bool amp_ = decltype(amp)::value, check_ = decltype(check)::value,
+                               frac_ = decltype(frac)::value;
+                if (local)
+                    run_samples<double, n_, sensed_, amp_, check_, frac_, CascadeMap, true>(
+                        map, law, x, force, n, noise, out.displacement, out.current, limit_, watch, *this, k_, draws);
+                else
+                    run_samples<double, n_, sensed_, amp_, check_, frac_>(
+                        map, law, x, force, n, noise, out.displacement, out.current, limit_, watch, *this, k_);
+            });
         if (local) local->commit();
         LoopState::scatter(*this, x, 0);
         saturated_ += watch.saturated;

@@ -47,7 +47,8 @@ void MimoModel::validate() const {
                 "in [0, 1) (0: DC coupled)");
         require(force_noise[j] >= 0.0, "force_noise", force_noise[j], ">= 0 (N rms)");
     }
-    for (Eigen::Index j = 0; j < q; ++j) require(sensor_noise[j] >= 0.0, "sensor_noise", sensor_noise[j], ">= 0 (m rms)");
+    for (Eigen::Index j = 0; j < q; ++j)
+        require(sensor_noise[j] >= 0.0, "sensor_noise", sensor_noise[j], ">= 0 (m rms)");
 }
 
 MimoLoop::MimoLoop(const MimoModel& model, const std::vector<std::uint64_t>& seeds)
@@ -95,7 +96,8 @@ MimoLoop::MimoLoop(const MimoModel& model, const std::vector<std::uint64_t>& see
         for (Eigen::Index j = 0; j < Mt.cols(); ++j) {
             bool used = false;
             for (Eigen::Index at = first; at < first + per_pass; ++at)
-                used = used || (order[static_cast<std::size_t>(at)] >= 0 && nonzero(order[static_cast<std::size_t>(at)], j));
+                used = used ||
+                       (order[static_cast<std::size_t>(at)] >= 0 && nonzero(order[static_cast<std::size_t>(at)], j));
             if (used) columns.push_back(j);
         }
         // inputs first

@@ -41,7 +41,8 @@ void mimo_experiments(const MimoModel& model, const double* const* period_force,
         for (Eigen::Index l = 0; l < K; ++l) {
             if (all_forces || first == 0)
                 for (Eigen::Index j = 0; j < p; ++j)
-                    Eigen::Map<Eigen::RowVectorXd>(recorded[l] + j * (all_forces ? length : L) + first, L) = rec[l].row(j);
+                    Eigen::Map<Eigen::RowVectorXd>(recorded[l] + j * (all_forces ? length : L) + first, L) =
+                        rec[l].row(j);
             for (Eigen::Index j = 0; j < q; ++j)
                 Eigen::Map<Eigen::RowVectorXd>(measured[l] + j * length + first, L) = out[l].row(j);
         }

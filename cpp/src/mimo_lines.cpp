@@ -21,7 +21,6 @@ using cd = std::complex<double>;
 namespace {
 constexpr double pi = 3.14159265358979323846;
 
-
 // From rest: the loop sample by sample, every recorded period transformed.
 void lines_from_rest(const MimoModel& model, const double* const* period_force, Eigen::Index L,
                      Eigen::Index settle_periods, Eigen::Index periods, const std::vector<std::uint64_t>& seeds,
@@ -133,7 +132,8 @@ SteadyLines::SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eig
         if (k0 % 64 == 0) poll_interrupt();
         const Eigen::Index count = std::min<Eigen::Index>(lanes, B - k0);
         cd shifts[lanes];
-        for (int l = 0; l < lanes; ++l) shifts[l] = z_[static_cast<std::size_t>(k0 + std::min<Eigen::Index>(l, count - 1))];
+        for (int l = 0; l < lanes; ++l)
+            shifts[l] = z_[static_cast<std::size_t>(k0 + std::min<Eigen::Index>(l, count - 1))];
         lu.factor(shifts);
         for (Eigen::Index j = 0; j < q; ++j) {
             load(Bt.col(p + j));
@@ -147,10 +147,11 @@ SteadyLines::SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eig
         for (Eigen::Index i = 0; i < q; ++i) {
             load(Ct.row(i));
             lu.solve_transposed(re.data(), im.data());  // row i of C (zI - M)^-1 T, per lane
-            for (Eigen::Index c = 0; c < m; ++c) {  // G(i, c) = that row times column c of Bt
+            for (Eigen::Index c = 0; c < m; ++c) {      // G(i, c) = that row times column c of Bt
                 double g_re[lanes] = {}, g_im[lanes] = {};
                 for (Eigen::Index s = 0; s < n; ++s)
-                    for (int l = 0; l < lanes; ++l) g_re[l] += re[at(s, l)] * Bt(s, c), g_im[l] += im[at(s, l)] * Bt(s, c);
+                    for (int l = 0; l < lanes; ++l)
+                        g_re[l] += re[at(s, l)] * Bt(s, c), g_im[l] += im[at(s, l)] * Bt(s, c);
                 const double direct = c >= p ? model_.Dn(i, c - p) : 0.0;
                 for (Eigen::Index l = 0; l < count; ++l) G_(i, (k0 + l) * m + c) = cd(g_re[l] + direct, g_im[l]);
             }
@@ -171,7 +172,8 @@ SteadyLines::SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eig
     Eigen::VectorXd root_explained(2 * B * q);  // per column of Xn: sqrt((2 / L) sigma^2) of its probe
     for (Eigen::Index k = 0; k < B; ++k)
         for (Eigen::Index j = 0; j < q; ++j)
-            root_explained.segment(2 * (k * q + j), 2).setConstant(std::sqrt(2.0 / static_cast<double>(L)) * model_.sensor_noise[j]);
+            root_explained.segment(2 * (k * q + j), 2)
+                .setConstant(std::sqrt(2.0 / static_cast<double>(L)) * model_.sensor_noise[j]);
     Eigen::MatrixXd explained_by_lines = Eigen::MatrixXd::Zero(n, n);  // Xn diag(explained) Xn^T, one triangle
     explained_by_lines.selfadjointView<Eigen::Lower>().rankUpdate(Xn_ * root_explained.asDiagonal());
     explained_by_lines = explained_by_lines.selfadjointView<Eigen::Lower>();
@@ -225,13 +227,16 @@ void SteadyLines::start(const double* period_force, std::uint64_t seed, Eigen::I
             clean_force_(k, c) = a > 0.0 ? F(k, c) * (zk - 1.0) / (zk - a) : F(k, c);
         }
     }
-    for (Eigen::Index k = 0; k < B; ++k) det_.segment(k * q, q) = G_.middleCols(k * m, p).lazyProduct(F.row(k).transpose());
+    for (Eigen::Index k = 0; k < B; ++k)
+        det_.segment(k * q, q) = G_.middleCols(k * m, p).lazyProduct(F.row(k).transpose());
     // The noise: the state starts in its stationary distribution, then goes on period by period.
     rest_.emplace(stream_seed(seed, 3, sources_.part));
     probe_.clear();
-    for (Eigen::Index j = 0; j < q; ++j) probe_.emplace_back(stream_seed(seed, 0, sources_.probes[static_cast<std::size_t>(j)]));
+    for (Eigen::Index j = 0; j < q; ++j)
+        probe_.emplace_back(stream_seed(seed, 0, sources_.probes[static_cast<std::size_t>(j)]));
     force_.clear();
-    for (Eigen::Index c = 0; c < p; ++c) force_.emplace_back(stream_seed(seed, 2, sources_.forces[static_cast<std::size_t>(c)]));
+    for (Eigen::Index c = 0; c < p; ++c)
+        force_.emplace_back(stream_seed(seed, 2, sources_.forces[static_cast<std::size_t>(c)]));
     Eigen::VectorXd z0 = Eigen::VectorXd::Zero(model_.states());
     add_stationary_noise(root_, sources_.part == 0 ? seed : stream_seed(seed, 4, sources_.part), z0);
     Z_.resize(model_.states(), std::min(periods, block) + 1);
@@ -268,7 +273,8 @@ void SteadyLines::draw_block() {
     }
     Eigen::MatrixXd w = WL_ * (Xn_ * V_);  // n x P
     w.noalias() += residual_root_ * draws_;
-    for (Eigen::Index period = 0; period < P; ++period) Z_.col(period + 1).noalias() = ML_ * Z_.col(period) + w.col(period);
+    for (Eigen::Index period = 0; period < P; ++period)
+        Z_.col(period + 1).noalias() = ML_ * Z_.col(period) + w.col(period);
     const Eigen::MatrixXd d = T_inverse_ * (Z_.middleCols(1, P) - Z_.leftCols(P));
     change_re_.noalias() = CRz_re_ * d;
     change_im_.noalias() = CRz_im_ * d;
@@ -287,7 +293,8 @@ void SteadyLines::next(cd* force_lines, cd* displacement_lines) {
     for (Eigen::Index k = 0; k < B; ++k)
         for (Eigen::Index i = 0; i < q; ++i) {
             cd y = det_[k * q + i] - cd(change_re_(k * q + i, period), change_im_(k * q + i, period));
-            for (Eigen::Index j = 0; j < q; ++j) y += G_(i, k * m + p + j) * cd(v[2 * (k * q + j)], v[2 * (k * q + j) + 1]);
+            for (Eigen::Index j = 0; j < q; ++j)
+                y += G_(i, k * m + p + j) * cd(v[2 * (k * q + j)], v[2 * (k * q + j) + 1]);
             zero_if_finite += 0.0 * y.real() + 0.0 * y.imag();
             displacement_lines[k * q + i] = y;
         }
@@ -319,7 +326,8 @@ void steady_lines(const MimoModel& model, const double* const* period_force, Eig
     const Eigen::Index p = model.forces(), q = model.probes();
     const auto B = static_cast<Eigen::Index>(bins.size());
     std::vector<MimoPart> parts = independent_parts(model);
-    if (std::any_of(parts.begin(), parts.end(), [](const MimoPart& part) { return part.forces.empty() || part.probes.empty(); })) {
+    if (std::any_of(parts.begin(), parts.end(),
+                    [](const MimoPart& part) { return part.forces.empty() || part.probes.empty(); })) {
         const auto all = [](Eigen::Index count) {  // a part no force drives or no probe sees: drawn whole
             std::vector<Eigen::Index> ids(static_cast<std::size_t>(count));
             std::iota(ids.begin(), ids.end(), Eigen::Index{0});
@@ -331,19 +339,22 @@ void steady_lines(const MimoModel& model, const double* const* period_force, Eig
         const std::vector<Eigen::Index>& forces = parts[t].forces;
         const std::vector<Eigen::Index>& probes = parts[t].probes;
         const auto pp = static_cast<Eigen::Index>(forces.size()), qq = static_cast<Eigen::Index>(probes.size());
-        SteadyLines draw(parts.size() == 1 ? model : parts[t].model(model), L, bins, {probes, forces, static_cast<Eigen::Index>(t)});
+        SteadyLines draw(parts.size() == 1 ? model : parts[t].model(model), L, bins,
+                         {probes, forces, static_cast<Eigen::Index>(t)});
         std::vector<double> force(static_cast<std::size_t>(L * pp));
         std::vector<cd> f(static_cast<std::size_t>(B * pp)), y(static_cast<std::size_t>(B * qq));
         for (Eigen::Index l = 0; l < K; ++l) {
             for (Eigen::Index k = 0; k < L; ++k)
                 for (Eigen::Index c = 0; c < pp; ++c)
-                    force[static_cast<std::size_t>(k * pp + c)] = period_force[l][k * p + forces[static_cast<std::size_t>(c)]];
+                    force[static_cast<std::size_t>(k * pp + c)] =
+                        period_force[l][k * p + forces[static_cast<std::size_t>(c)]];
             draw.start(force.data(), seeds[static_cast<std::size_t>(l)], periods);
             for (Eigen::Index period = 0; period < periods; ++period) {
                 draw.next(f.data(), y.data());
                 for (Eigen::Index k = 0; k < B; ++k) {
                     for (Eigen::Index c = 0; c < pp; ++c)
-                        force_lines[((period * B + k) * p + forces[static_cast<std::size_t>(c)]) * K + l] = f[static_cast<std::size_t>(k * pp + c)];
+                        force_lines[((period * B + k) * p + forces[static_cast<std::size_t>(c)]) * K + l] =
+                            f[static_cast<std::size_t>(k * pp + c)];
                     for (Eigen::Index j = 0; j < qq; ++j)
                         displacement_lines[((period * B + k) * q + probes[static_cast<std::size_t>(j)]) * K + l] =
                             y[static_cast<std::size_t>(k * qq + j)];

@@ -13,7 +13,8 @@ struct Links {
     }
     Eigen::Index root(Eigen::Index a) {
         while (parent[static_cast<std::size_t>(a)] != a)
-            a = parent[static_cast<std::size_t>(a)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(a)])];
+            a = parent[static_cast<std::size_t>(a)] =
+                parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(a)])];
         return a;
     }
     void link(Eigen::Index a, Eigen::Index b) { parent[static_cast<std::size_t>(root(a))] = root(b); }
@@ -52,10 +53,12 @@ std::vector<MimoPart> independent_parts(const MimoModel& model) {
 }
 
 MimoModel MimoPart::model(const MimoModel& whole) const {
-    const auto pick = [](const Eigen::MatrixXd& X, const std::vector<Eigen::Index>& rows, const std::vector<Eigen::Index>& cols) {
+    const auto pick = [](const Eigen::MatrixXd& X, const std::vector<Eigen::Index>& rows,
+                         const std::vector<Eigen::Index>& cols) {
         Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(cols.size()));
         for (std::size_t r = 0; r < rows.size(); ++r)
-            for (std::size_t c = 0; c < cols.size(); ++c) out(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = X(rows[r], cols[c]);
+            for (std::size_t c = 0; c < cols.size(); ++c)
+                out(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = X(rows[r], cols[c]);
         return out;
     };
     const auto entries = [](const Eigen::VectorXd& x, const std::vector<Eigen::Index>& at) {

@@ -36,10 +36,8 @@ void MimoLoop::run(const double* const* force, Eigen::Index n, double* const* re
                 for (Eigen::Index j = 0; j < p; ++j) in[j * lanes_] = f[j];
                 for (Eigen::Index j = 0; j < q; ++j) in[(p + j) * lanes_] = sensor_draws_[l](k, j);
             }
-        if (lanes_ == 2)
-            run_block<2>(force, start, m, recorded, out);
-        else
-            run_block<1>(force, start, m, recorded, out);
+        if (lanes_ == 2) run_block<2>(force, start, m, recorded, out);
+        else run_block<1>(force, start, m, recorded, out);
         // Inf and NaN never turn finite again in a linear recursion: one check per chunk.
         for (Eigen::Index i = 0; i < rows_ * lanes_; ++i) {
             if (std::isfinite(w_[static_cast<std::size_t>(i)])) continue;
@@ -92,8 +90,8 @@ __attribute__((always_inline)) inline void column(const double* x, Quad* value) 
 // Adds `count` columns of x (at x + offsets[j], K values each) times their coefficients (P blocks of four
 // each, from c) to the sums: even columns to `even`, odd ones to `odd` (two short chains, not one long one).
 template <int K, int P>
-__attribute__((always_inline)) inline void accumulate(const double* x, int count, const int*& offsets,
-                                                      const double*& c, Quad* even, Quad* odd) {
+__attribute__((always_inline)) inline void accumulate(const double* x, int count, const int*& offsets, const double*& c,
+                                                      Quad* even, Quad* odd) {
     const Quad zero = {0.0, 0.0, 0.0, 0.0};
     Quad v = zero, value = zero;
     int j = 0;
@@ -194,9 +192,12 @@ void advance_any(Step& st) {
 template <int K>
 void advance_lanes(Step& st, int pass) {
     switch (pass) {
-        case 1: return advance_any<K, 1>(st);
-        case 2: return advance_any<K, 2>(st);
-        default: return advance_any<K, 4>(st);
+        case 1:
+            return advance_any<K, 1>(st);
+        case 2:
+            return advance_any<K, 2>(st);
+        default:
+            return advance_any<K, 4>(st);
     }
 }
 }  // namespace
@@ -212,10 +213,28 @@ void MimoLoop::run_block(const double* const* force, Eigen::Index start, Eigen::
         noise[l] = force_draws_[l].data();
         for (Eigen::Index j = 0; j < p; ++j) transducer[8 * l + j] = q_(j, l);
     }
-    Step st{model_.states(), p, model_.probes(), model_.outputs(), passes_, m, start, pass_inputs_.data(),
-            pass_states_.data(), offsets_.data(), position_.data() + model_.states(), coefficients_.data(),
-            inputs_.data(), w_.data(), next_.data(), force, recorded, out, model_.transducer_pole.data(), transducer,
-            noise, chunk};
+    Step st{model_.states(),
+            p,
+            model_.probes(),
+            model_.outputs(),
+            passes_,
+            m,
+            start,
+            pass_inputs_.data(),
+            pass_states_.data(),
+            offsets_.data(),
+            position_.data() + model_.states(),
+            coefficients_.data(),
+            inputs_.data(),
+            w_.data(),
+            next_.data(),
+            force,
+            recorded,
+            out,
+            model_.transducer_pole.data(),
+            transducer,
+            noise,
+            chunk};
     advance_lanes<K>(st, pass_);
     if (st.w != w_.data()) w_.swap(next_);  // an odd number of samples: the state is in the other buffer
     for (int l = 0; l < K; ++l)

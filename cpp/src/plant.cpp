@@ -23,7 +23,8 @@ void Rig::validate() const {
     if (eddy_bandwidth) require_positive("eddy_bandwidth", *eddy_bandwidth, "Hz");
     if (sensor_bandwidth) require_positive("sensor_bandwidth", *sensor_bandwidth, "Hz");
     require(substeps >= 1, "substeps", substeps, "an integer >= 1");
-    require(std::isfinite(sensor_noise) && sensor_noise >= 0.0, "sensor_noise", sensor_noise, "finite and >= 0 (m rms)");
+    require(std::isfinite(sensor_noise) && sensor_noise >= 0.0, "sensor_noise", sensor_noise,
+            "finite and >= 0 (m rms)");
     require(std::isfinite(force_noise) && force_noise >= 0.0, "force_noise", force_noise, "finite and >= 0 (N rms)");
     require(std::isfinite(mass_loading) && mass_loading >= 0.0, "mass_loading", mass_loading, "finite and >= 0 (kg)");
     if (force_coupling_tau) require_positive("force_coupling_tau", *force_coupling_tau, "s");
@@ -58,10 +59,8 @@ void continuous_model(const Rig& rig, StateMatrix& A, InputMatrix& B) {
     B.setZero();
     // Where the current driving each stage comes from: a state, or the command itself.
     auto feed = [&](int row, int source_state, double gain) {
-        if (source_state >= 0)
-            A(row, source_state) += gain;
-        else
-            B(row, 1) += gain;
+        if (source_state >= 0) A(row, source_state) += gain;
+        else B(row, 1) += gain;
     };
     const int amp = rig.amp_bandwidth ? i : -1;
     const int eddy = rig.eddy_bandwidth ? i_f : amp;

@@ -131,8 +131,7 @@ void PeriodEstimator::add_period_lines(const cd* force_lines, const cd* displace
 }
 
 void PeriodEstimator::require_finite_block() const {
-    if (!std::isfinite(block_f_.sum() + block_y_.sum()))
-        throw NonFiniteSamples(block_first_, in_block_ * plan_.period);
+    if (!std::isfinite(block_f_.sum() + block_y_.sum())) throw NonFiniteSamples(block_first_, in_block_ * plan_.period);
 }
 
 bool PeriodEstimator::new_mean(Eigen::VectorXd& block, const Eigen::VectorXd& previous) const {
@@ -149,12 +148,9 @@ void PeriodEstimator::close_block() {
     const bool new_f = new_mean(block_f_, previous_f_), new_y = new_mean(block_y_, previous_y_);
     lines_f_.resize(bins);
     lines_y_.resize(bins);
-    if (new_f && new_y)
-        transform_(block_f_.data(), block_y_.data(), lines_f_.data(), lines_y_.data());
-    else if (new_f)
-        transform_(block_f_.data(), lines_f_.data());
-    else if (new_y)
-        transform_(block_y_.data(), lines_y_.data());
+    if (new_f && new_y) transform_(block_f_.data(), block_y_.data(), lines_f_.data(), lines_y_.data());
+    else if (new_f) transform_(block_f_.data(), lines_f_.data());
+    else if (new_y) transform_(block_y_.data(), lines_y_.data());
     if (new_f) previous_f_.swap(block_f_);
     if (new_y) previous_y_.swap(block_y_);
     have_previous_ = true;
@@ -226,8 +222,8 @@ LineEstimate PeriodEstimator::estimate(double mass, double fs, int median_window
         const double w = two_pi * static_cast<double>(plan_.excited[j]) * fs / static_cast<double>(L);
         const cd H = e.H[j], Y = mean_Y_[j];
         // Linearised: dH = (dF - H dY) / Y. E|dH|^2 and E[dH^2] give the variances of Re and Im.
-        const double abs2 = (m_FFc_[j] + std::norm(H) * m_YYc_[j] - 2.0 * std::real(std::conj(H) * m_FYc_[j])) *
-                            to_mean / std::norm(Y);
+        const double abs2 =
+            (m_FFc_[j] + std::norm(H) * m_YYc_[j] - 2.0 * std::real(std::conj(H) * m_FYc_[j])) * to_mean / std::norm(Y);
         const cd sq = (m_FF_[j] + H * H * m_YY_[j] - 2.0 * H * m_FY_[j]) * to_mean / (Y * Y);
         e.k[j] = mass * w * w + H.real();
         e.c[j] = H.imag() / w;

@@ -53,7 +53,8 @@ Eigen::VectorXd periodic_start(const Eigen::MatrixXd& M, Eigen::Index N, const E
     return (I - matrix_power(M, N)).partialPivLu().solve(zN);
 }
 
-Eigen::MatrixXd stationary_covariance(const Eigen::MatrixXd& M, const Eigen::MatrixXd& G, const Eigen::VectorXd& sigma) {
+Eigen::MatrixXd stationary_covariance(const Eigen::MatrixXd& M, const Eigen::MatrixXd& G,
+                                      const Eigen::VectorXd& sigma) {
     // P = sum_k M^k Q M^kT; doubling: P <- P + A P A^T, A <- A A.
     Eigen::MatrixXd P = G * sigma.cwiseAbs2().asDiagonal() * G.transpose(), A = M, next(M.rows(), M.cols());
     for (int it = 0; it < 80; ++it) {
@@ -85,7 +86,8 @@ Eigen::VectorXd balancing(const Eigen::MatrixXd& M) {
     for (bool changed = true; changed;) {
         changed = false;
         for (Eigen::Index i = 0; i < n; ++i) {
-            const double c = B.col(i).cwiseAbs().sum() - std::abs(B(i, i)), r = B.row(i).cwiseAbs().sum() - std::abs(B(i, i));
+            const double c = B.col(i).cwiseAbs().sum() - std::abs(B(i, i)),
+                         r = B.row(i).cwiseAbs().sum() - std::abs(B(i, i));
             if (c == 0.0 || r == 0.0) continue;
             double f = 1.0;
             const double total = c + r;

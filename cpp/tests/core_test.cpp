@@ -15,14 +15,14 @@
 
 #include "amb_fast/batch.hpp"
 #include "amb_fast/errors.hpp"
+#include "amb_fast/estimate2x2.hpp"
 #include "amb_fast/experiment.hpp"
 #include "amb_fast/hessenberg.hpp"
 #include "amb_fast/lanes.hpp"
 #include "amb_fast/loop.hpp"
-#include "amb_fast/random.hpp"
-#include "amb_fast/estimate2x2.hpp"
 #include "amb_fast/mimo_lines.hpp"
 #include "amb_fast/mimo_sweep.hpp"
+#include "amb_fast/random.hpp"
 #include "amb_fast/spectrum.hpp"
 #include "amb_fast/steady.hpp"
 
@@ -94,8 +94,9 @@ std::vector<double> multisine(Eigen::Index L, int lines) {
     std::vector<double> f(static_cast<std::size_t>(L), 0.0);
     for (int n = 1; n <= lines; ++n)
         for (Eigen::Index k = 0; k < L; ++k)
-            f[static_cast<std::size_t>(k)] += 0.1 * std::cos(2.0 * M_PI * n * static_cast<double>(k) / static_cast<double>(L) -
-                                                             M_PI * n * (n - 1) / lines);
+            f[static_cast<std::size_t>(k)] +=
+                0.1 *
+                std::cos(2.0 * M_PI * n * static_cast<double>(k) / static_cast<double>(L) - M_PI * n * (n - 1) / lines);
     return f;
 }
 }  // namespace
@@ -146,16 +147,16 @@ int main() {
         const SweepEstimates s = run_sweep(period_force, points, 3, plan, 5, 2);
         bool same = true;
         for (int g : {0, 17, 36}) {
-            const LineEstimate e = run_experiment(noisy, points[g].controller, period_force, points[g].settle_periods, 3,
-                                                  plan, points[g].seed, 5);
+            const LineEstimate e = run_experiment(noisy, points[g].controller, period_force, points[g].settle_periods,
+                                                  3, plan, points[g].seed, 5);
             same = same && (s.H.row(g).transpose() - e.H).cwiseAbs().maxCoeff() == 0.0 && s.status[g] == 0;
         }
         check(same, "sweep rows equal single runs bit for bit");
         const SweepEstimates steady = run_sweep(period_force, points, 3, plan, 5, 2, true);
         bool steady_same = true;
         for (int g : {0, 17, 36}) {
-            const LineEstimate e = run_experiment(noisy, points[g].controller, period_force, points[g].settle_periods, 3,
-                                                  plan, points[g].seed, 5, true);
+            const LineEstimate e = run_experiment(noisy, points[g].controller, period_force, points[g].settle_periods,
+                                                  3, plan, points[g].seed, 5, true);
             steady_same = steady_same && (steady.H.row(g).transpose() - e.H).cwiseAbs().maxCoeff() == 0.0;
         }
         check(steady_same, "steady-start sweep rows equal single steady-start runs bit for bit");
@@ -221,7 +222,8 @@ int main() {
         std::vector<double> r2(2000);
         simulate(pair, ctrl, small.data(), 2000, {r2.data(), yn.data(), c.data()});
         double diff = 0.0, peak = 0.0;
-        for (std::size_t k = 0; k < yl.size(); ++k) diff = std::max(diff, std::abs(yl[k] - yn[k])), peak = std::max(peak, std::abs(yl[k]));
+        for (std::size_t k = 0; k < yl.size(); ++k)
+            diff = std::max(diff, std::abs(yl[k] - yn[k])), peak = std::max(peak, std::abs(yl[k]));
         check(diff < 1e-6 * peak, "non-linear law is linear at small amplitude");
     }
 
@@ -285,7 +287,8 @@ int main() {
     {  // The estimator's transform: FFT and direct sum agree with a plain DFT of a known signal.
         const Eigen::Index L = 4001;  // prime: pocketfft's Bluestein path
         std::vector<double> x(static_cast<std::size_t>(L));
-        for (std::size_t k = 0; k < x.size(); ++k) x[k] = std::cos(0.3 * static_cast<double>(k)) + 1e-3 * static_cast<double>(k % 7);
+        for (std::size_t k = 0; k < x.size(); ++k)
+            x[k] = std::cos(0.3 * static_cast<double>(k)) + 1e-3 * static_cast<double>(k % 7);
         const std::vector<Eigen::Index> bins{0, 1, 17, 2000};
         std::vector<cd> by_fft(bins.size()), by_sum(bins.size());
         LineTransform fft(L, bins, LineTransform::Method::fft), sum(L, bins, LineTransform::Method::direct);
@@ -340,8 +343,9 @@ int main() {
         soft.kp = 500.0;
         soft.ki = 0.0;
         std::vector<double> ones(40000, 1.0), r(40000), y(40000), i(40000);
-        check_throws<std::overflow_error>([&] { simulate(rig, soft.controller(), ones.data(), 40000, {r.data(), y.data(), i.data()}); },
-                                          "unstable loop stops at a non-finite state");
+        check_throws<std::overflow_error>(
+            [&] { simulate(rig, soft.controller(), ones.data(), 40000, {r.data(), y.data(), i.data()}); },
+            "unstable loop stops at a non-finite state");
     }
 
     {  // The dense MIMO loop: two uncoupled first-order lags z' = a z + (1 - a) f, one with a 0.5 coupling
@@ -371,8 +375,8 @@ int main() {
         check(worst < 1e-14, "MIMO loop equals its recursion written out");
         const Eigen::Index L = 50;
         // Each of the two experiments records 2 channels x 2 periods of L samples.
-        std::vector<double> period(f.begin(), f.begin() + 2 * L), steady_rec(8 * L), steady_y(8 * L), settled_rec(8 * L),
-            settled_y(8 * L);
+        std::vector<double> period(f.begin(), f.begin() + 2 * L), steady_rec(8 * L), steady_y(8 * L),
+            settled_rec(8 * L), settled_y(8 * L);
         const double* forces[2] = {period.data(), period.data()};
         double* recs[2] = {steady_rec.data(), steady_rec.data() + 4 * L};
         double* ys[2] = {steady_y.data(), steady_y.data() + 4 * L};
@@ -391,7 +395,8 @@ int main() {
         for (double d : draws) mean += d, square += d * d;
         mean /= static_cast<double>(draws.size());
         square /= static_cast<double>(draws.size());
-        check(std::abs(mean) < 0.02 && std::abs(square / 4.0 - 1.0) < 0.02, "ziggurat normal draws: mean 0, variance 4");
+        check(std::abs(mean) < 0.02 && std::abs(square / 4.0 - 1.0) < 0.02,
+              "ziggurat normal draws: mean 0, variance 4");
     }
 
     {  // The MIMO kernels on a larger sparse loop (rows in several passes, both lane counts): the portable
@@ -453,7 +458,8 @@ int main() {
                 for (Eigen::Index i = 0; i < r; ++i) worst = std::max(worst, std::abs(out[k * r + i] - o[i]));
                 z = model.M * z + model.Bf * fk;
             }
-            check(worst < 1e-12, "MIMO kernel (noise-free) equals the recursion with Eigen (" + std::to_string(worst) + ")");
+            check(worst < 1e-12,
+                  "MIMO kernel (noise-free) equals the recursion with Eigen (" + std::to_string(worst) + ")");
         }
     }
 
@@ -475,8 +481,9 @@ int main() {
         model.force_noise = Eigen::Vector2d(0.3, 0.4);
         const std::vector<MimoPart> parts = independent_parts(model);
         using V = std::vector<Eigen::Index>;
-        check(parts.size() == 2 && parts[0].states == V{0, 2, 4} && parts[0].forces == V{1} && parts[0].probes == V{0} &&
-                  parts[1].states == V{1, 3} && parts[1].forces == V{0} && parts[1].probes == V{1},
+        check(parts.size() == 2 && parts[0].states == V{0, 2, 4} && parts[0].forces == V{1} &&
+                  parts[0].probes == V{0} && parts[1].states == V{1, 3} && parts[1].forces == V{0} &&
+                  parts[1].probes == V{1},
               "independent_parts: two parts, their states, forces and probes");
         const MimoModel second = parts.size() == 2 ? parts[1].model(model) : model;
         check(second.M.rows() == 2 && second.M(0, 1) == model.M(1, 3) && second.M(1, 1) == model.M(3, 3) &&
@@ -511,10 +518,12 @@ int main() {
         lu.factor(shifts);
         other.factor(rotated);
         Eigen::VectorXcd b(n);
-        for (Eigen::Index i = 0; i < n; ++i) b[i] = std::complex<double>(std::cos(static_cast<double>(i)), 0.5 * static_cast<double>(i));
+        for (Eigen::Index i = 0; i < n; ++i)
+            b[i] = std::complex<double>(std::cos(static_cast<double>(i)), 0.5 * static_cast<double>(i));
         std::vector<double> xr(n * 4), xi(n * 4), yr(n * 4), yi(n * 4), xr2(n * 4), xi2(n * 4);
         for (Eigen::Index i = 0; i < n; ++i)
-            for (int l = 0; l < 4; ++l) xr[i * 4 + l] = yr[i * 4 + l] = b[i].real(), xi[i * 4 + l] = yi[i * 4 + l] = b[i].imag();
+            for (int l = 0; l < 4; ++l)
+                xr[i * 4 + l] = yr[i * 4 + l] = b[i].real(), xi[i * 4 + l] = yi[i * 4 + l] = b[i].imag();
         xr2 = xr, xi2 = xi;
         lu.solve(xr.data(), xi.data());
         lu.solve_transposed(yr.data(), yi.data());
@@ -529,7 +538,8 @@ int main() {
                 x[i] = {xr[i * 4 + l], xi[i * 4 + l]};
                 y[i] = {yr[i * 4 + l], yi[i * 4 + l]};
                 const int moved = (l + 1) % 4;  // shift l sits in lane l + 1 of `other`
-                same_in_any_lane = same_in_any_lane && xr2[i * 4 + moved] == xr[i * 4 + l] && xi2[i * 4 + moved] == xi[i * 4 + l];
+                same_in_any_lane =
+                    same_in_any_lane && xr2[i * 4 + moved] == xr[i * 4 + l] && xi2[i * 4 + moved] == xi[i * 4 + l];
             }
             worst = std::max({worst, (x - want_x).norm() / want_x.norm(), (y - want_y).norm() / want_y.norm()});
         }
@@ -541,7 +551,8 @@ int main() {
             HessenbergLU again(H);
             again.factor(rotated);
             std::vector<double> ar(n * 4), ai(n * 4), br(n * 4), bi(n * 4);
-            for (Eigen::Index i = 0; i < n * 4; ++i) ar[i] = br[i] = std::cos(0.3 * i), ai[i] = bi[i] = std::sin(0.7 * i);
+            for (Eigen::Index i = 0; i < n * 4; ++i)
+                ar[i] = br[i] = std::cos(0.3 * i), ai[i] = bi[i] = std::sin(0.7 * i);
             again.solve(ar.data(), ai.data());
             again.solve_transposed(br.data(), bi.data());
             for (auto* v : {&ai, &br, &bi}) ar.insert(ar.end(), v->begin(), v->end());
@@ -559,7 +570,8 @@ int main() {
         for (Eigen::Index i = 0; i < n; ++i)
             for (Eigen::Index j = 0; j < n; ++j) M(i, j) = 0.25 * std::sin(2.3 * static_cast<double>(i * n + j) + 0.1);
         M(0, 0) = 0.999;  // a slow pole
-        for (Eigen::Index i = 0; i < n; ++i) G(i, 0) = std::cos(static_cast<double>(i)), G(i, 1) = 0.3 * static_cast<double>(i);
+        for (Eigen::Index i = 0; i < n; ++i)
+            G(i, 0) = std::cos(static_cast<double>(i)), G(i, 1) = 0.3 * static_cast<double>(i);
         M.row(n - 1).setZero();  // the last state is not driven: P singular
         M.col(n - 1).setZero();
         G.row(n - 1).setZero();

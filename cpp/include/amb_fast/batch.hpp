@@ -16,8 +16,8 @@ enum class PointStatus : int { ok = 0, unstable = 1, touchdown = 2, saturated = 
 struct SweepPoint {
     Rig rig;
     Controller controller;
-    Eigen::Index settle_periods;   // periods before recording
-    std::uint64_t seed;            // measurement noise of this point
+    Eigen::Index settle_periods;  // periods before recording
+    std::uint64_t seed;           // measurement noise of this point
 };
 
 using RowMatrixXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -40,13 +40,13 @@ struct LoopMatrices {
     Eigen::Index m = 0;
 };
 
-// Runs every point, from rest or (steady_start) from the periodic steady state. All points share the sample rate fs (Hz) and the known mass of eq. 9 (kg).
-// workers <= 0 means one thread per hardware core. Given the points' loop matrices, each worker first
-// checks its points' stability (eigenvalues as `eigenvalues` computes them): a point whose spectral radius
-// is 1 or more is flagged unstable and not run; radius holds every point's.
+// Runs every point, from rest or (steady_start) from the periodic steady state. All points share the sample rate fs
+// (Hz) and the known mass of eq. 9 (kg). workers <= 0 means one thread per hardware core. Given the points' loop
+// matrices, each worker first checks its points' stability (eigenvalues as `eigenvalues` computes them): a point whose
+// spectral radius is 1 or more is flagged unstable and not run; radius holds every point's.
 SweepEstimates run_sweep(const Eigen::Ref<const Eigen::VectorXd>& period_force, const std::vector<SweepPoint>& points,
-                         Eigen::Index periods, LinePlan plan, int median_window, int workers,
-                         bool steady_start = false, LoopMatrices loops = {});
+                         Eigen::Index periods, LinePlan plan, int median_window, int workers, bool steady_start = false,
+                         LoopMatrices loops = {});
 
 // The eigenvalues of `count` real m x m matrices (stack: row-major, one after the other) into
 // values[k * m + i], on `workers` threads (<= 0: one per core): a sweep's stability checks, which a single

@@ -15,7 +15,6 @@ namespace amb_fast {
 
 constexpr int max_controller_order = 24;
 
-
 // s[k+1] = A s[k] + B e[k],  u[k] = C s[k] + D e[k],  applied `delay` samples later.
 struct Controller {
     Eigen::MatrixXd A = Eigen::MatrixXd::Zero(0, 0);  // n x n
@@ -47,12 +46,18 @@ inline int controller_capacity(int order) {
 template <class F>
 decltype(auto) with_capacity(int capacity, F&& f) {
     switch (capacity) {
-        case 2: return f(std::integral_constant<int, 2>{});
-        case 4: return f(std::integral_constant<int, 4>{});
-        case 6: return f(std::integral_constant<int, 6>{});
-        case 8: return f(std::integral_constant<int, 8>{});
-        case 16: return f(std::integral_constant<int, 16>{});
-        default: return f(std::integral_constant<int, 24>{});
+        case 2:
+            return f(std::integral_constant<int, 2>{});
+        case 4:
+            return f(std::integral_constant<int, 4>{});
+        case 6:
+            return f(std::integral_constant<int, 6>{});
+        case 8:
+            return f(std::integral_constant<int, 8>{});
+        case 16:
+            return f(std::integral_constant<int, 16>{});
+        default:
+            return f(std::integral_constant<int, 24>{});
     }
 }
 
@@ -104,7 +109,7 @@ AMB_FAST_ALWAYS_INLINE T pass_through_delay(T* line, std::size_t d, std::size_t&
 
 // The controller with its state and its delay line, for single runs.
 class DigitalController {
-public:
+  public:
     explicit DigitalController(const Controller& c);
 
     // Reads e[k] (m) and returns the command held over [kT, (k+1)T): u[k - delay] (A).
@@ -141,7 +146,7 @@ public:
         return delay_line_.empty() ? u : pass_through_delay(delay_line_.data(), delay_line_.size(), head_, u);
     }
 
-private:
+  private:
     Controller controller_;
     int capacity_;
     std::array<double, max_controller_order> state_{};

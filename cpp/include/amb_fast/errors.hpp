@@ -30,7 +30,7 @@ struct Touchdown : std::runtime_error {
     double position;  // m
     long sample;
 
-private:
+  private:
     static std::string message(double t, double y, long k) {
         std::ostringstream msg;
         msg.precision(6);

@@ -14,7 +14,8 @@ namespace amb_fast {
 // (sum of squares / (P (P - 1))). Matrices per line, row-major 2x2: [line][i][j].
 struct Estimate2x2 {
     Eigen::Index lines = 0, periods = 0;
-    std::vector<std::complex<double>> H, receptance, force, displacement;  // force, displacement: [line][channel][experiment]
+    std::vector<std::complex<double>> H, receptance, force,
+        displacement;  // force, displacement: [line][channel][experiment]
     std::vector<double> var_re, var_im;
 };
 Estimate2x2 estimate_2x2(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines,

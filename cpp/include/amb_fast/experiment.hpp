@@ -28,9 +28,10 @@ bool draws_spectra(const Rig& rig, bool steady_start);
 // `periods` more into the estimator. From rest, or with steady_start from the periodic steady state
 // (Loop::start_periodic); where draws_spectra, the periods' spectra are drawn instead (settle periods
 // drawn and dropped), with the noise streams of stream_seed(seed, ...) (mimo.hpp).
-LineEstimate run_experiment(const Rig& rig, const Controller& controller, const Eigen::Ref<const Eigen::VectorXd>& period_force,
-                            Eigen::Index settle_periods, Eigen::Index periods, LinePlan plan, std::uint64_t seed,
-                            int median_window, bool steady_start = false);
+LineEstimate run_experiment(const Rig& rig, const Controller& controller,
+                            const Eigen::Ref<const Eigen::VectorXd>& period_force, Eigen::Index settle_periods,
+                            Eigen::Index periods, LinePlan plan, std::uint64_t seed, int median_window,
+                            bool steady_start = false);
 
 // The estimator over a recording of n samples per channel (a whole number of periods after settling).
 LineEstimate identify(const double* force, const double* displacement, Eigen::Index n, Eigen::Index settle_periods,

@@ -14,16 +14,16 @@ namespace amb_fast {
 // the lanes in SIMD registers and the latency-bound chains of one solve overlap; every lane gets the
 // operations it would get alone, whichever lanes it shares.
 class HessenbergLU {
-public:
+  public:
     static constexpr int lanes = 4;
     explicit HessenbergLU(const Eigen::MatrixXd& H);  // storage only: factor() before solving
-    void factor(const std::complex<double>* z);        // z[0..lanes): the shifts
+    void factor(const std::complex<double>* z);       // z[0..lanes): the shifts
     // (z_l I - H) x_l = b_l in place; x_l's entry i at re[i * lanes + l], im[i * lanes + l].
     void solve(double* re, double* im) const;
     void solve_transposed(double* re, double* im) const;  // (z_l I - H)^T x_l = b_l
     Eigen::Index size() const { return n_; }
 
-private:
+  private:
     Eigen::Index n_;
     Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> H_;
     std::vector<double> ur_, ui_;  // U, row-major, lane-minor: [(i * n + c) * lanes + l]

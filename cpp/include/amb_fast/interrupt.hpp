@@ -35,7 +35,7 @@ inline void poll_interrupt() {
 // Installs a check on this thread for its lifetime (threads started by the core install their
 // caller's).
 class ScopedInterruptCheck {
-public:
+  public:
     explicit ScopedInterruptCheck(const InterruptCheck* check) : previous_(detail::current_interrupt_check()) {
         detail::current_interrupt_check() = check;
     }
@@ -43,7 +43,7 @@ public:
     ScopedInterruptCheck(const ScopedInterruptCheck&) = delete;
     ScopedInterruptCheck& operator=(const ScopedInterruptCheck&) = delete;
 
-private:
+  private:
     const InterruptCheck* previous_;
 };
 

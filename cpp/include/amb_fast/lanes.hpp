@@ -92,7 +92,7 @@ inline bool wide_lanes_available() { return false; }
 // guarantees alignof(T), which for a lane vector built outside AVX2 code is less than AVX2 assumes.
 template <class T>
 class LaneArray {
-public:
+  public:
     LaneArray() = default;
     explicit LaneArray(std::size_t n) { resize(n); }
     void resize(std::size_t n) {
@@ -105,7 +105,7 @@ public:
     T& operator[](std::size_t k) { return data_[k]; }
     const T& operator[](std::size_t k) const { return data_[k]; }
 
-private:
+  private:
     static constexpr std::size_t alignment = sizeof(T) > alignof(T) ? sizeof(T) : alignof(T);
     struct Free {
         void operator()(T* p) const { ::operator delete(p, std::align_val_t(alignment)); }
@@ -123,7 +123,9 @@ inline std::atomic<int>& forced_simd_kernel() {
     return kernel;
 }
 // avx2 falls back to portable where the processor lacks it.
-inline void set_simd_kernel(SimdKernel kernel) { forced_simd_kernel().store(static_cast<int>(kernel), std::memory_order_relaxed); }
+inline void set_simd_kernel(SimdKernel kernel) {
+    forced_simd_kernel().store(static_cast<int>(kernel), std::memory_order_relaxed);
+}
 inline bool simd_avx2() {
     return static_cast<SimdKernel>(forced_simd_kernel().load(std::memory_order_relaxed)) != SimdKernel::portable &&
            wide_lanes_available();

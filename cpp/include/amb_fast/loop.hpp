@@ -18,10 +18,9 @@ namespace amb_fast {
 // zero-order-held force: q[k+1] = a q[k] + (1 - a) f[k], recorded f[k] - q[k], a = exp(-T/tau)), or
 // DC coupled (records the force as it is).
 class ForceTransducer {
-public:
+  public:
     ForceTransducer(const Rig& rig, double T)
-        : coupled_(rig.force_coupling_tau.has_value()),
-          a_(coupled_ ? std::exp(-T / *rig.force_coupling_tau) : 0.0) {}
+        : coupled_(rig.force_coupling_tau.has_value()), a_(coupled_ ? std::exp(-T / *rig.force_coupling_tau) : 0.0) {}
 
     void record(const double* force, Eigen::Index n, double* recorded) {
         if (!coupled_) {
@@ -54,7 +53,7 @@ public:
     double state() const { return q_; }
     void set_state(double q) { q_ = coupled_ ? q : 0.0; }
 
-private:
+  private:
     bool coupled_;
     double a_, q_ = 0.0;
 };
@@ -68,7 +67,7 @@ struct Channels {
 
 // The loop keeps its state between calls to run(), so a long experiment can be streamed in chunks.
 class Loop {
-public:
+  public:
     // The seed fixes the measurement noise; it is unused when the rig has none.
     // The controller's delay is lengthened by the rig's dead time in whole samples.
     Loop(const Rig& rig, const Controller& controller, std::uint64_t seed = 0);
@@ -111,8 +110,8 @@ public:
     // Throws Touchdown if |y| (m) has reached the clearance at this sample.
     void check_clearance(double y, Eigen::Index sample) const;
 
-private:
-    friend struct LoopState;  // loop_kernel.hpp: the state into and out of the kernel's registers
+  private:
+    friend struct LoopState;                     // loop_kernel.hpp: the state into and out of the kernel's registers
     static constexpr Eigen::Index chunk = 1024;  // noise is drawn a chunk at a time
 
     // force_noise: where the loop draws the force transducer's noise of these samples, or null.
@@ -133,14 +132,14 @@ private:
     Rig rig_;
     DigitalController controller_;
     double T_;
-    int sensed_;         // state read by the sensor: ys, or y itself
-    bool has_amp_;       // coil current is a state, or the command itself
+    int sensed_;                      // state read by the sensor: ys, or y itself
+    bool has_amp_;                    // coil current is a state, or the command itself
     std::optional<SampleMap> plant_;  // linear law: the one-sample map
     std::optional<CascadeMap> map_;   // the same, written out for the kernel
-    Stretch early_, late_;  // non-linear law: [0, fraction) with the previous command, then the rest
-    double fraction_;       // the dead time's fraction of a sample (s)
-    double u_prev_ = 0.0;   // the previous applied command, felt over that fraction (A)
-    int drive_;          // augmented index of the force-producing current
+    Stretch early_, late_;            // non-linear law: [0, fraction) with the previous command, then the rest
+    double fraction_;                 // the dead time's fraction of a sample (s)
+    double u_prev_ = 0.0;             // the previous applied command, felt over that fraction (A)
+    int drive_;                       // augmented index of the force-producing current
     MagnetPair magnets_;
     StateVector x_ = StateVector::Zero();
     Eigen::Index k_ = 0;

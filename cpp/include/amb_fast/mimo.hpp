@@ -35,7 +35,7 @@ struct MimoModel {
 // independent runs of the same model in lock step (each with its own forces, noise and state): they
 // share every load of the matrix, and their sample-to-sample chains overlap.
 class MimoLoop {
-public:
+  public:
     MimoLoop(const MimoModel& model, const std::vector<std::uint64_t>& seeds);  // one seed per lane
 
     Eigen::Index lanes() const { return lanes_; }
@@ -51,7 +51,7 @@ public:
     // Lane l's state z.
     Eigen::VectorXd state(Eigen::Index lane) const;
 
-private:
+  private:
     static constexpr Eigen::Index chunk = 1024;
     template <int K>
     void run_block(const double* const* force, Eigen::Index start, Eigen::Index m, double* const* recorded,
@@ -68,17 +68,17 @@ private:
     // columns (f, n: not waiting for the previous sample) first, then the state columns. Rows padded
     // with zeros to whole passes.
     static constexpr int slots = 4;
-    int pass_ = 1;                        // blocks per pass: 1, 2 or 4
-    Eigen::Index passes_ = 0, rows_ = 0;  // passes, padded rows
-    std::vector<Eigen::Index> position_;  // row i of [z'; o] at position_[i] of the state buffers
+    int pass_ = 1;                                // blocks per pass: 1, 2 or 4
+    Eigen::Index passes_ = 0, rows_ = 0;          // passes, padded rows
+    std::vector<Eigen::Index> position_;          // row i of [z'; o] at position_[i] of the state buffers
     std::vector<int> pass_inputs_, pass_states_;  // columns per pass
     std::vector<int> offsets_;                    // per pass and column: where its value is (in doubles)
     std::vector<double, Eigen::aligned_allocator<double>> coefficients_;  // [pass][column][block][slot]
-    std::vector<double, Eigen::aligned_allocator<double>> w_, next_;  // rows by position x lanes
-    std::vector<double, Eigen::aligned_allocator<double>> inputs_;    // a chunk's [f; n] x lanes, sample-major
-    Eigen::MatrixXd q_;             // transducer states, p x lanes
+    std::vector<double, Eigen::aligned_allocator<double>> w_, next_;      // rows by position x lanes
+    std::vector<double, Eigen::aligned_allocator<double>> inputs_;        // a chunk's [f; n] x lanes, sample-major
+    Eigen::MatrixXd q_;                                                   // transducer states, p x lanes
     std::vector<std::uint64_t> seeds_;
-    std::vector<NormalStream> sensor_rng_, force_rng_;  // lane-major: source j of lane l at l*count + j
+    std::vector<NormalStream> sensor_rng_, force_rng_;         // lane-major: source j of lane l at l*count + j
     std::vector<Eigen::MatrixXd> sensor_draws_, force_draws_;  // per lane: chunk x q, chunk x p
     Eigen::Index k_ = 0;
 };

@@ -53,7 +53,7 @@ struct NoiseSources {
 };
 
 class SteadyLines {
-public:
+  public:
     // bins strictly between 0 and L/2.
     SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eigen::Index> bins, NoiseSources sources = {});
     // A new experiment of `periods` periods: period_force (L x p, sample-major, finite: the callers check
@@ -67,21 +67,21 @@ public:
     static constexpr Eigen::Index block = 16;
     const std::vector<Eigen::Index>& bins() const { return bins_; }
 
-private:
+  private:
     void draw_block();
 
     MimoModel model_;
     NoiseSources sources_;
     Eigen::Index L_;
     std::vector<Eigen::Index> bins_;
-    LineTransform transform_;                   // the excitation's lines
-    std::vector<std::complex<double>> z_;       // e^{jw} per line
+    LineTransform transform_;              // the excitation's lines
+    std::vector<std::complex<double>> z_;  // e^{jw} per line
     Eigen::MatrixXd T_inverse_, ML_, WL_, residual_root_, CRz_re_, CRz_im_, Xn_;
     Eigen::MatrixXcd G_, clean_force_;
-    Eigen::MatrixXd root_;                      // of the state's stationary noise covariance
-    Eigen::VectorXcd det_;                      // the probes' periodic response to the forces
-    std::optional<NormalStream> rest_;          // the state's line-free part
-    std::vector<NormalStream> probe_, force_;   // per probe, per force channel
+    Eigen::MatrixXd root_;                     // of the state's stationary noise covariance
+    Eigen::VectorXcd det_;                     // the probes' periodic response to the forces
+    std::optional<NormalStream> rest_;         // the state's line-free part
+    std::vector<NormalStream> probe_, force_;  // per probe, per force channel
     // The current block, a column per period: the probes' noise spectra V as (Re, Im) pairs per line and
     // probe, the state at the periods' ends (Z: the block's start first), the leak of the state's change
     // into the lines (real, imaginary parts).

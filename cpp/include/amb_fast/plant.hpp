@@ -13,22 +13,22 @@ enum class ForceLaw { linear, nonlinear };
 
 // SI units; bandwidths in Hz, an empty one is an ideal (pass-through) stage.
 struct Rig {
-    double mass = 0.92;            // kg
-    double kyy = -53.3e3;          // N/m, position stiffness (negative: destabilising)
-    double kiy = 47.19;            // N/A, current stiffness
-    double bias_current = 0.65;    // A
+    double mass = 0.92;          // kg
+    double kyy = -53.3e3;        // N/m, position stiffness (negative: destabilising)
+    double kiy = 47.19;          // N/A, current stiffness
+    double bias_current = 0.65;  // A
     ForceLaw force_law = ForceLaw::linear;
-    std::optional<double> amp_bandwidth;     // Hz, amplifier current loop
-    std::optional<double> eddy_bandwidth;    // Hz, eddy-current force lag
-    std::optional<double> sensor_bandwidth;  // Hz, displacement sensor
-    int substeps = 2;              // integrator steps per sample for the non-linear force law
-    double sensor_noise = 0.0;     // m rms, white, added to the sensor output (seen by the controller too)
-    double force_noise = 0.0;      // N rms, white, added to the recorded force (not to the applied one)
-    double mass_loading = 0.0;     // kg moving with the platform beyond `mass` (transducer, stinger)
+    std::optional<double> amp_bandwidth;       // Hz, amplifier current loop
+    std::optional<double> eddy_bandwidth;      // Hz, eddy-current force lag
+    std::optional<double> sensor_bandwidth;    // Hz, displacement sensor
+    int substeps = 2;                          // integrator steps per sample for the non-linear force law
+    double sensor_noise = 0.0;                 // m rms, white, added to the sensor output (seen by the controller too)
+    double force_noise = 0.0;                  // N rms, white, added to the recorded force (not to the applied one)
+    double mass_loading = 0.0;                 // kg moving with the platform beyond `mass` (transducer, stinger)
     std::optional<double> force_coupling_tau;  // s, AC coupling of the piezo force transducer; empty = DC
-    std::optional<double> clearance;      // m, mechanical clearance; empty: the air gap (non-linear law) or none
-    std::optional<double> current_limit;  // A, amplifier limit on |i|; empty: i0 (non-linear law) or none
-    double dead_time = 0.0;        // s, transport delay from the current command to the amplifier
+    std::optional<double> clearance;           // m, mechanical clearance; empty: the air gap (non-linear law) or none
+    std::optional<double> current_limit;       // A, amplifier limit on |i|; empty: i0 (non-linear law) or none
+    double dead_time = 0.0;                    // s, transport delay from the current command to the amplifier
 
     // Throws std::invalid_argument naming the parameter and the value.
     void validate() const;
@@ -153,26 +153,26 @@ struct CascadeCoefficients {
     template <class D, class Fill>
     CascadeCoefficients<D> broadcast(Fill fill) const {
         CascadeCoefficients<D> out;
-        const double* from[] = {&yy,  &yv,  &yi,  &yf,  &vy,  &vv,  &vi,  &vf,  &ii,  &fi,  &ff,  &sy,  &sv,  &si,  &sf,
-                                &ss,  &y_f, &v_f, &s_f, &y_u, &v_u, &i_u, &f_u, &s_u, &y_p, &v_p, &i_p, &f_p, &s_p};
-        D* to[] = {&out.yy,  &out.yv,  &out.yi,  &out.yf,  &out.vy,  &out.vv,  &out.vi,  &out.vf,
-                   &out.ii,  &out.fi,  &out.ff,  &out.sy,  &out.sv,  &out.si,  &out.sf,  &out.ss,
-                   &out.y_f, &out.v_f, &out.s_f, &out.y_u, &out.v_u, &out.i_u, &out.f_u, &out.s_u,
-                   &out.y_p, &out.v_p, &out.i_p, &out.f_p, &out.s_p};
+        const double* from[] = {&yy, &yv,  &yi,  &yf,  &vy,  &vv,  &vi,  &vf,  &ii,  &fi,  &ff,  &sy,  &sv,  &si, &sf,
+                                &ss, &y_f, &v_f, &s_f, &y_u, &v_u, &i_u, &f_u, &s_u, &y_p, &v_p, &i_p, &f_p, &s_p};
+        D* to[] = {&out.yy,  &out.yv,  &out.yi,  &out.yf,  &out.vy,  &out.vv,  &out.vi,  &out.vf,  &out.ii,  &out.fi,
+                   &out.ff,  &out.sy,  &out.sv,  &out.si,  &out.sf,  &out.ss,  &out.y_f, &out.v_f, &out.s_f, &out.y_u,
+                   &out.v_u, &out.i_u, &out.f_u, &out.s_u, &out.y_p, &out.v_p, &out.i_p, &out.f_p, &out.s_p};
         for (std::size_t k = 0; k < sizeof from / sizeof from[0]; ++k) fill(*to[k], *from[k]);
         return out;
     }
 
     C yy, yv, yi, yf, vy, vv, vi, vf, ii, fi, ff, sy, sv, si, sf, ss;  // Phi
-    C y_f, v_f, s_f, y_u, v_u, i_u, f_u, s_u;                         // Gf, G0: force, command
-    C y_p, v_p, i_p, f_p, s_p;                                        // G1: previous command
+    C y_f, v_f, s_f, y_u, v_u, i_u, f_u, s_u;                          // Gf, G0: force, command
+    C y_p, v_p, i_p, f_p, s_p;                                         // G1: previous command
 };
 
 struct CascadeMap : CascadeCoefficients<double> {
     explicit CascadeMap(const SampleMap& map);  // throws std::logic_error if the map lost the structure
 
     using CascadeCoefficients<double>::advance;
-    AMB_FAST_ALWAYS_INLINE void advance(double& xy, double& xv, double& xi, double& xf, double& xs, double f, double u) const {
+    AMB_FAST_ALWAYS_INLINE void advance(double& xy, double& xv, double& xi, double& xf, double& xs, double f,
+                                        double u) const {
 #if AMB_FAST_PAIRED_MAP
         // y and v rows side by side: each lane does the scalar rows' operations in their order.
         const Pair n = ((pair_y * xy + pair_v * xv) + (pair_i * xi + pair_f * xf)) + (pair_force * f + pair_u * u);

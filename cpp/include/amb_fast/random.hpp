@@ -16,9 +16,9 @@
 // sqrt, floor, frexp, ldexp, all exactly rounded), so no std:: distribution (implementation defined)
 // and no libm exp/log (not correctly rounded everywhere) in any value or decision: the two the ziggurat
 // needs are written out below (the wedge test asks the platform's exp first, but only to settle the
-// cases that are far from the boundary, so every decision is exp_neg's); the core is compiled with -ffp-contract=off (CMakeLists.txt), so no fused multiply-add
-// changes a rounding either. The stream is sample-sequential with no buffer, so cutting a run into
-// chunks of any size gives the same numbers.
+// cases that are far from the boundary, so every decision is exp_neg's); the core is compiled with -ffp-contract=off
+// (CMakeLists.txt), so no fused multiply-add changes a rounding either. The stream is sample-sequential with no buffer,
+// so cutting a run into chunks of any size gives the same numbers.
 #pragma once
 
 #include <Eigen/Core>
@@ -42,9 +42,11 @@ constexpr double ln2_lo = 1.90821492927058770002e-10;
 inline double exp_neg(double x) {
     const double k = std::floor(x * 1.4426950408889634 + 0.5);
     const double r = (x - k * ln2_hi) - k * ln2_lo;
+    // clang-format off: a table
     constexpr double c[] = {1.0,           1.0,            1.0 / 2,         1.0 / 6,         1.0 / 24,
                             1.0 / 120,     1.0 / 720,      1.0 / 5040,      1.0 / 40320,     1.0 / 362880,
                             1.0 / 3628800, 1.0 / 39916800, 1.0 / 479001600, 1.0 / 6227020800};  // 1/n!
+    // clang-format on
     double p = c[13];
     for (int n = 12; n >= 0; --n) p = p * r + c[n];
     return std::ldexp(p, static_cast<int>(k));
@@ -69,12 +71,12 @@ inline double log_pos(double x) {
 // The ziggurat's tables: layer i (1..255) spans |x| < x_i, every layer and the base (with the tail
 // beyond r) of area v; computed once, from basic operations only, so identical everywhere.
 struct Ziggurat {
-    static constexpr double r = 3.6541528853610088;   // start of the tail
-    static constexpr double v = 4.92867323399e-3;     // area of each layer
-    static constexpr double m = 4503599627370496.0;   // 2^52: the abscissa's resolution
-    std::array<std::uint64_t, 256> k{};  // accept at once if the 52-bit abscissa is below k[i]
-    std::array<double, 256> w{};         // x = abscissa * w[i]
-    std::array<double, 256> f{};         // density exp(-x_i^2 / 2) at the layer edges
+    static constexpr double r = 3.6541528853610088;  // start of the tail
+    static constexpr double v = 4.92867323399e-3;    // area of each layer
+    static constexpr double m = 4503599627370496.0;  // 2^52: the abscissa's resolution
+    std::array<std::uint64_t, 256> k{};              // accept at once if the 52-bit abscissa is below k[i]
+    std::array<double, 256> w{};                     // x = abscissa * w[i]
+    std::array<double, 256> f{};                     // density exp(-x_i^2 / 2) at the layer edges
 
     Ziggurat() {
         const double fr = exp_neg(-0.5 * r * r);
@@ -105,7 +107,7 @@ struct Ziggurat {
 
 // xoshiro256++: 256 bits of state, period 2^256 - 1, about 1 ns per 64-bit output.
 class Xoshiro256pp {
-public:
+  public:
     explicit Xoshiro256pp(std::uint64_t seed) {
         for (auto& word : s_) {  // splitmix64
             std::uint64_t z = (seed += 0x9e3779b97f4a7c15ULL);
@@ -133,7 +135,7 @@ public:
     const std::array<std::uint64_t, 4>& state() const { return s_; }
     void set_state(const std::array<std::uint64_t, 4>& s) { s_ = s; }
 
-private:
+  private:
     static std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
     std::array<std::uint64_t, 4> s_{};
 };
@@ -144,7 +146,7 @@ class NormalLanes;
 // One noise source: independent N(0, sigma^2) deviates, one stream per seed. The numbers depend only
 // on the seed and on how many were drawn before, never on how the draws are grouped into calls.
 class NormalStream {
-public:
+  public:
     explicit NormalStream(std::uint64_t seed) : rng_(seed), zig_(&random_detail::Ziggurat::tables()) {}
 
     // One standard normal deviate.
@@ -158,7 +160,7 @@ public:
     // deviates in the same order (the rare path goes through the stream itself); commit() hands the
     // generator back, after which the stream continues where the copy stopped.
     class Local {
-    public:
+      public:
         explicit Local(NormalStream& stream) : stream_(&stream), rng_(stream.rng_), zig_(stream.zig_) {}
         AMB_FAST_ALWAYS_INLINE double operator()() {
             const std::uint64_t bits = rng_();
@@ -171,7 +173,7 @@ public:
         }
         void commit() { stream_->rng_ = rng_; }
 
-    private:
+      private:
         NormalStream* stream_;
         Xoshiro256pp rng_;
         const random_detail::Ziggurat* zig_;
@@ -186,7 +188,7 @@ public:
         for (Eigen::Index j = 0; j < n; ++j) out[j] += sigma * (*this)();
     }
 
-private:
+  private:
     template <int K>
     friend class NormalLanes;
 
@@ -222,7 +224,8 @@ private:
             if (abscissa < z.k[layer]) return signed_by(x, bits);
             if (layer == 0) return signed_by(tail(), bits);
             // The wedge between the rectangle and the density: an exact test with a second uniform.
-            if (below_density((z.f[layer - 1] - z.f[layer]) * rng_.uniform() + z.f[layer], x)) return signed_by(x, bits);
+            if (below_density((z.f[layer - 1] - z.f[layer]) * rng_.uniform() + z.f[layer], x))
+                return signed_by(x, bits);
             bits = rng_();
         }
     }
@@ -259,7 +262,7 @@ private:
 // rare path). Sweeps draw their points' noise this way, four streams in one AVX2 register.
 template <int K>
 class NormalLanes {
-public:
+  public:
     using Words = LaneWords<K>;
     using Values = Lanes<K>;
 
@@ -324,7 +327,7 @@ public:
         store(s0, s1, s2, s3);
     }
 
-private:
+  private:
     static AMB_FAST_ALWAYS_INLINE Words rotl(Words x, int k) { return (x << k) | (x >> (64 - k)); }
     template <class To, class From>
     static AMB_FAST_ALWAYS_INLINE To reinterpret(From v) {

@@ -16,23 +16,23 @@ class pocketfft_r;
 namespace amb_fast {
 
 struct LinePlan {
-    Eigen::Index period = 0;                // samples per period L
-    std::vector<Eigen::Index> excited;      // harmonic numbers (DFT bins) of the excited lines, 1..L/2-1
-    std::vector<Eigen::Index> unexcited;    // harmonic numbers at which to report levels
-    Eigen::Index periods_per_block = 1;     // > 1 only for long records: variance from batch means
+    Eigen::Index period = 0;              // samples per period L
+    std::vector<Eigen::Index> excited;    // harmonic numbers (DFT bins) of the excited lines, 1..L/2-1
+    std::vector<Eigen::Index> unexcited;  // harmonic numbers at which to report levels
+    Eigen::Index periods_per_block = 1;   // > 1 only for long records: variance from batch means
     void validate() const;
 };
 
 struct LineEstimate {
-    Eigen::VectorXcd force;         // N, period-averaged complex amplitude at each excited line
-    Eigen::VectorXcd displacement;  // m, likewise
-    Eigen::VectorXcd H;             // N/m, dynamic stiffness F/Y
-    Eigen::VectorXd k, c;           // N/m, N s/m: actual coefficients (paper eq. 9)
-    Eigen::VectorXd k_std, c_std;   // their standard errors, from the period-to-period variance
+    Eigen::VectorXcd force;              // N, period-averaged complex amplitude at each excited line
+    Eigen::VectorXcd displacement;       // m, likewise
+    Eigen::VectorXcd H;                  // N/m, dynamic stiffness F/Y
+    Eigen::VectorXd k, c;                // N/m, N s/m: actual coefficients (paper eq. 9)
+    Eigen::VectorXd k_std, c_std;        // their standard errors, from the period-to-period variance
     Eigen::VectorXd k_smooth, c_smooth;  // median filtered across lines
     Eigen::VectorXd unexcited_force, unexcited_displacement;  // N, m: amplitudes at unexcited lines
-    Eigen::Index periods = 0;       // periods averaged
-    Eigen::Index blocks = 0;        // independent groups behind the variance (dof = blocks - 1)
+    Eigen::Index periods = 0;                                 // periods averaged
+    Eigen::Index blocks = 0;             // independent groups behind the variance (dof = blocks - 1)
     Eigen::Index saturated_samples = 0;  // recorded samples at which the amplifier clipped (simulations)
 };
 
@@ -50,7 +50,7 @@ struct NonFiniteSamples : std::invalid_argument {
 // numpy.fft.rfft to about 1e-15 of the spectrum's largest bin. Memory O(L); one object serves one
 // thread at a time.
 class LineTransform {
-public:
+  public:
     enum class Method { automatic, fft, direct };
     LineTransform(Eigen::Index period, std::vector<Eigen::Index> bins, Method method = Method::automatic);
 
@@ -66,18 +66,18 @@ public:
     static double fft_cost(Eigen::Index period);
     static double direct_cost(Eigen::Index period, Eigen::Index bins);
 
-private:
+  private:
     Eigen::Index L_;
     std::vector<Eigen::Index> bins_;
     Method method_;
     std::shared_ptr<const pocketfft::detail::pocketfft_r<double>> plan_;  // fft: shared by a thread's users
-    std::vector<double> work_;                                           // fft: the period, transformed in place
-    std::vector<double> pair_work_;  // fft of two channels: L SIMD vectors (lanes x, y), plus room to align
-    std::vector<std::complex<double>> twiddle_;                          // direct: exp(-2 pi i n / L), n < L
+    std::vector<double> work_;                                            // fft: the period, transformed in place
+    std::vector<double> pair_work_;              // fft of two channels: L SIMD vectors (lanes x, y), plus room to align
+    std::vector<std::complex<double>> twiddle_;  // direct: exp(-2 pi i n / L), n < L
 };
 
 class PeriodEstimator {
-public:
+  public:
     explicit PeriodEstimator(LinePlan plan);
     // Forgets every period added, keeping the memory (an estimator reused for the next experiment).
     void restart();
@@ -99,7 +99,7 @@ public:
     // mass (kg) enters k = m w^2 + Re H; fs (Hz) sets the line frequencies; window is odd.
     LineEstimate estimate(double mass, double fs, int median_window) const;
 
-private:
+  private:
     void close_block();
     // The closed block's spectra (lines_f_, lines_y_, block means) into the sums and co-moments.
     void add_block();
@@ -110,9 +110,9 @@ private:
     bool new_mean(Eigen::VectorXd& block, const Eigen::VectorXd& previous) const;
 
     LinePlan plan_;
-    std::vector<Eigen::Index> bins_;           // excited, then unexcited harmonics
-    Eigen::VectorXd block_f_, block_y_;        // time-domain sums of the open block's periods
-    Eigen::VectorXcd sum_F_, sum_Y_;           // spectra at bins_, summed over the closed blocks' periods
+    std::vector<Eigen::Index> bins_;     // excited, then unexcited harmonics
+    Eigen::VectorXd block_f_, block_y_;  // time-domain sums of the open block's periods
+    Eigen::VectorXcd sum_F_, sum_Y_;     // spectra at bins_, summed over the closed blocks' periods
     LineTransform transform_;
     Eigen::Index periods_ = 0, in_block_ = 0, blocks_ = 0, block_first_ = 0;
     Eigen::VectorXd previous_f_, previous_y_;  // the last block means (once have_previous_)

@@ -11,8 +11,8 @@ namespace amb_fast {
 
 // The loop's state stacked as z = [x (the plant's 5 states), s (the controller's n), line (the delay
 // line, oldest command first), u_prev (the previous applied command, with a fractional dead time)].
-// The controller's delay here includes the dead time's whole samples. Without noise or limits, z[k+1] = M z[k] + (force term); white sensor
-// noise n[k] adds noise_in * n[k] (it enters through the measurement e).
+// The controller's delay here includes the dead time's whole samples. Without noise or limits, z[k+1] = M z[k] + (force
+// term); white sensor noise n[k] adds noise_in * n[k] (it enters through the measurement e).
 struct ClosedLoopMap {
     ClosedLoopMap(const Rig& rig, const Controller& controller, double fraction)
         : ClosedLoopMap(sample_map(rig, controller.period()), rig.sensor_bandwidth ? state::ys : state::y, controller,
