@@ -5,6 +5,7 @@ closed loop they make. ``AnyController`` and ``DesignController`` name the contr
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Union
 
@@ -97,7 +98,22 @@ def discrete_plant(rig: Rig, fs: float) -> tuple[np.ndarray, np.ndarray, list[st
     the amplifier still receives the previous command, so ``x[k+1] = Phi x + Gf f + G0 u[k-m] +
     G1 u[k-m-1]`` with ``G0 = Gamma_u(T - delta)``, ``G1 = Phi(T - delta) Gamma_u(delta)`` (the modified
     z-transform of the zero-order hold).
+
+    Made once per distinct ``(rig, fs)`` (a closed loop's poles for a PID take four loops of one plant;
+    sweeps over the rig make many): ``Phi`` and ``Gamma`` are read-only.
     """
+    Phi, Gamma, states = _discrete_plant(rig, float(fs))
+    return Phi, Gamma, list(states)
+
+
+@functools.lru_cache(maxsize=256)
+def _discrete_plant(rig: Rig, fs: float) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    Phi, Gamma, states = _discretised(rig, fs)
+    Phi.flags.writeable = Gamma.flags.writeable = False
+    return Phi, Gamma, tuple(states)
+
+
+def _discretised(rig: Rig, fs: float) -> tuple[np.ndarray, np.ndarray, list[str]]:
     A, B, states = plant_matrices(rig)
     T = 1.0 / fs
     Phi, Gamma = _zoh(A, B, T)
@@ -181,6 +197,19 @@ def controller_matrices(controller: AnyController) -> tuple[np.ndarray, np.ndarr
     return A2, B2, C2, np.zeros((1, 1))
 
 
+def loop_matrix(
+    Phi: np.ndarray, Gamma: np.ndarray, sensor: np.ndarray, Ac: np.ndarray, Bc: np.ndarray, Cc: np.ndarray,
+    Dc: np.ndarray,
+) -> np.ndarray:  # fmt: skip
+    """The closed loop's state matrix ``[[Phi + gu Dc S, gu Cc], [Bc S, Ac]]`` (``gu``: the command's column
+    of ``Gamma``, ``S``: the sensor row), assembled in place (np.block costs more than the products)."""
+    n, m = Phi.shape[0], Ac.shape[0]
+    gu = Gamma[:, 1:2]
+    A = np.empty((n + m, n + m))
+    A[:n, :n], A[:n, n:], A[n:, :n], A[n:, n:] = Phi + gu @ Dc @ sensor, gu @ Cc, Bc @ sensor, Ac
+    return A
+
+
 @two_axis_aware
 def closed_loop(rig: Rig, controller: AnyController) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The linear loop as one discrete state space ``(A, B, C, D)`` with sample period ``1/fs``.
@@ -194,8 +223,8 @@ def closed_loop(rig: Rig, controller: AnyController) -> tuple[np.ndarray, np.nda
     Ac, Bc, Cc, Dc = controller_matrices(controller)
     n, m = len(states), Ac.shape[0]
     sensor = sensor_row(states)
-    gu, gf = Gamma[:, 1:2], Gamma[:, 0:1]
-    A = np.block([[Phi + gu @ Dc @ sensor, gu @ Cc], [Bc @ sensor, Ac]])
+    gf = Gamma[:, 0:1]
+    A = loop_matrix(Phi, Gamma, sensor, Ac, Bc, Cc, Dc)
     B = np.vstack([gf, np.zeros((m, 1))])
     command = np.hstack([Dc @ sensor, Cc])
     samples = split_dead_time(rig.dead_time, controller.fs)[0]

@@ -16,7 +16,7 @@ from . import _core
 from ._blas import one_blas_thread
 from ._dispatch import two_axis_aware
 from ._errors import UnstableLoopError
-from ._linear_loop import AnyController, closed_loop
+from ._linear_loop import AnyController, closed_loop, controller_matrices, discrete_plant, loop_matrix, sensor_row
 from ._params import PID, Rig
 from ._validate import require, rig_and_controller
 
@@ -110,9 +110,11 @@ def _affine_closed_loop(
     ``A = base + kp S0 + (ki - ki0) S1 + (kd - kd0) S2`` with ki0, kd0 = 1 where the state exists.
     ``pid``'s own gains do not matter here (callers pass them as zero, for the cache)."""
     ki0, kd0 = float(with_integral), float(with_derivative)
+    Phi, Gamma, states = discrete_plant(rig, pid.fs)
+    sensor = sensor_row(states)
 
-    def at(p: float, i: float, d: float) -> np.ndarray:
-        return closed_loop(rig, replace(pid, kp=p, ki=i, kd=d))[0]
+    def at(p: float, i: float, d: float) -> np.ndarray:  # closed_loop(rig, replace(pid, ...))[0]
+        return loop_matrix(Phi, Gamma, sensor, *controller_matrices(replace(pid, kp=p, ki=i, kd=d)))
 
     base = at(0.0, ki0, kd0)
     slopes = [at(1.0, ki0, kd0) - base]
