@@ -8,6 +8,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -109,18 +110,28 @@ def _affine_closed_loop(
     """The closed-loop matrix is affine in (kp, ki, kd) for a given set of controller states:
     ``A = base + kp S0 + (ki - ki0) S1 + (kd - kd0) S2`` with ki0, kd0 = 1 where the state exists.
     ``pid``'s own gains do not matter here (callers pass them as zero, for the cache)."""
-    ki0, kd0 = float(with_integral), float(with_derivative)
     Phi, Gamma, states = discrete_plant(rig, pid.fs)
     sensor = sensor_row(states)
+    # closed_loop(rig, replace(pid, kp=..., ki=..., kd=...))[0] at the base gains and one step in each
+    first, *rest = _pid_steps(pid, with_integral, with_derivative)
+    assert first is not None
+    base = loop_matrix(Phi, Gamma, sensor, *first)
+    return base, np.array([np.zeros_like(base) if m is None else loop_matrix(Phi, Gamma, sensor, *m) - base
+                           for m in rest])  # fmt: skip
 
-    def at(p: float, i: float, d: float) -> np.ndarray:  # closed_loop(rig, replace(pid, ...))[0]
-        return loop_matrix(Phi, Gamma, sensor, *controller_matrices(replace(pid, kp=p, ki=i, kd=d)))
 
-    base = at(0.0, ki0, kd0)
-    slopes = [at(1.0, ki0, kd0) - base]
-    slopes.append(at(0.0, 2.0, kd0) - base if with_integral else np.zeros_like(base))
-    slopes.append(at(0.0, ki0, 2.0) - base if with_derivative else np.zeros_like(base))
-    return base, np.array(slopes)
+@functools.lru_cache(maxsize=64)
+def _pid_steps(pid: PID, with_integral: bool, with_derivative: bool) -> list[Any]:
+    """The controller matrices of ``pid`` at the base gains of :func:`_affine_closed_loop`, then one step
+    in kp, ki, kd (None where the state is absent): once per PID, whatever the rig (sweeps over the rig)."""
+    ki0, kd0 = float(with_integral), float(with_derivative)
+    gains = [(0.0, ki0, kd0), (1.0, ki0, kd0), (0.0, 2.0, kd0) if with_integral else None,
+             (0.0, ki0, 2.0) if with_derivative else None]  # fmt: skip
+    steps = [None if g is None else controller_matrices(replace(pid, kp=g[0], ki=g[1], kd=g[2])) for g in gains]
+    for matrices in filter(None, steps):
+        for matrix in matrices:
+            matrix.flags.writeable = False
+    return steps
 
 
 @functools.lru_cache(maxsize=64)
