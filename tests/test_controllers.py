@@ -517,3 +517,22 @@ def test_typical_controller_reads_as_documented() -> None:
     num, den = c.to_tf()
     _, h = signal.freqz(num, den, worN=F, fs=FS)
     close(c.response(F), h, 1e-9)
+
+
+def test_polynomial_products_equal_numpys() -> None:
+    """The continuous designs of series and parallel blocks multiply polynomials without np.polymul's
+    poly1d objects: the same numbers, leading zeros and all-zero polynomials included."""
+    from amb_fast.controllers._controller import _polymul
+
+    rng = np.random.default_rng(3)
+    cases = [
+        (np.zeros(1), rng.random(3)),
+        (np.array([0.0, 0.0, 1.0, 2.0]), rng.random(4)),
+        (rng.random(5), rng.random(2)),
+        (np.array([-0.0, 3.0]), np.array([1.0])),
+        (np.zeros(3), np.zeros(2)),
+    ]
+    for a, b in cases:
+        expected, ours = np.polymul(a, b), _polymul(a, b)
+        assert ours.dtype == expected.dtype
+        np.testing.assert_array_equal(ours, expected)
