@@ -9,7 +9,9 @@
    interleaved pairs (the goal's measure: robust to the machine's drift between blocks). In the same
    rounds as the 40-point pairs, pairs of the core's call alone and of pure arithmetic (eigenvalues of a
    large stack of small matrices): what the shared machine gives two threads at those moments.
-3. predict over 10^5 gain sets x 200 lines against a plain loop over gain sets calling predict.
+3. predict over 10^5 gain sets x 200 lines against a plain loop over gain sets calling predict; and
+   sweeps whose points each need their own loop (200 points of the amplifier's bandwidth, of a notch's
+   frequency) against the loop of run_experiment a user would write.
 4. Peak memory of a 10^5-point sweep (10 Hz fundamental, 20 lines) against the size of its estimates.
 
 Medians of repeated runs (noisy 2-core machine). Prints ratios, writes JSON.
@@ -20,6 +22,7 @@ Medians of repeated runs (noisy 2-core machine). Prints ratios, writes JSON.
 from __future__ import annotations
 
 import resource
+import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -131,6 +134,33 @@ def main() -> None:
     loop = median_seconds(lambda: [af.predict(rig, replace(pid, kp=g), sphs.freq) for g in gains[:loop_sets]], repeats)
     r["predict loop s (extrapolated)"] = loop * predict_sets / loop_sets
 
+    # 3b. Sweeps whose points each need their own loop (a rig field, a controller block's parameter): 200
+    # points of the amplifier's bandwidth and of a notch's frequency on 2 threads, against the loop of
+    # run_experiment a user would write. Every round shifts the values a little, so no cached loop or
+    # controller from an earlier round is reused (each sweep is a first sweep).
+    notched = pid.to_controller() * af.notch(700.0)
+    rebuilt_points = 20 if args.quick else 200
+    shifts = iter(range(1, 10**6))
+    cases = {
+        "amp_bandwidth": (pid, lambda: np.linspace(800.0, 1500.0, rebuilt_points) + 1e-6 * next(shifts),
+                          lambda v: (replace(rig, amp_bandwidth=v), pid)),
+        "notch_freq": (notched, lambda: np.linspace(400.0, 900.0, rebuilt_points) + 1e-6 * next(shifts),
+                       lambda v: (rig, notched.with_params(notch_freq=v))),
+    }  # fmt: skip
+    for name, (controller, values, model) in cases.items():
+        swept, looped = [], []
+        for _ in range(max(3, repeats)):
+            start = time.perf_counter()
+            af.sweep(rig, controller, sphs, workers=2, progress=False, **{name: values()})
+            swept.append(time.perf_counter() - start)
+            grid = values()
+            start = time.perf_counter()
+            for v in grid:
+                af.run_experiment(*model(v), sphs)
+            looped.append(time.perf_counter() - start)
+        r[f"{rebuilt_points}-point {name} sweep, 2 workers s"] = float(np.median(swept))
+        r[f"{rebuilt_points} run_experiment calls over {name} s"] = float(np.median(looped))
+
     # 4. Memory of a large sweep: estimates only, never time series.
     coarse = af.schroeder_multisine(f0=10.0, f_max=200.0)
     reset_peak_rss()
@@ -151,6 +181,16 @@ def main() -> None:
         "scaling 1 -> 2 workers, 40 points, blocks (goal >= 1.7)": r["40-point sweep 1 worker s"]
         / r["40-point sweep 2 workers s"],
         **paired,
+        **{
+            f"{name} sweep: points per second (2 workers)": rebuilt_points
+            / r[f"{rebuilt_points}-point {name} sweep, 2 workers s"]
+            for name in cases
+        },
+        **{
+            f"{name}: loop of run_experiment / sweep": r[f"{rebuilt_points} run_experiment calls over {name} s"]
+            / r[f"{rebuilt_points}-point {name} sweep, 2 workers s"]
+            for name in cases
+        },
         "predict: gain sets x lines per second": predict_sets * sphs.freq.size / r["predict vectorised s"],
         "predict: loop / vectorised": r["predict loop s (extrapolated)"] / r["predict vectorised s"],
         "memory sweep: points": memory_points,

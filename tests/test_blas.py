@@ -88,3 +88,26 @@ def test_a_sweep_makes_its_points_with_blas_on_one_thread() -> None:
         assert entered == [1]
     finally:
         _sweep.blas_on_one_thread = original
+
+
+def test_a_guard_inside_a_guard_does_nothing() -> None:
+    """A sweep's points each miss a cache whose function guards BLAS: inside the sweep's own guard those
+    enter no second threadpoolctl limit, and leaving them keeps BLAS on one thread."""
+    from amb_fast import _blas
+
+    if not blas_threads():
+        pytest.skip("no BLAS library that threadpoolctl can see")
+    with _blas.blas_on_one_thread():
+        controller = _blas._controller
+        limits = []
+        original = controller.limit
+        controller.limit = lambda **kwargs: limits.append(kwargs) or original(**kwargs)
+        try:
+            with _blas.blas_on_one_thread():
+                assert blas_threads() == [1] * len(blas_threads())
+            assert blas_threads() == [1] * len(blas_threads())
+            assert limits == []
+        finally:
+            del controller.limit
+    with _blas.blas_on_one_thread():  # a fresh guard after the first ended
+        assert blas_threads() == [1] * len(blas_threads())

@@ -11,23 +11,36 @@ process's own setting is restored on return.
 
 from __future__ import annotations
 
+import contextlib
 import functools
-from collections.abc import Callable
+import threading
+from collections.abc import Callable, Iterator
 from typing import Any, TypeVar
 
 F = TypeVar("F", bound=Callable[..., Any])
 
 _controller: Any = None
+_inside = threading.local()  # .guard: this thread is inside blas_on_one_thread
 
 
-def blas_on_one_thread() -> Any:
-    """A context in which the BLAS libraries of the process (OpenBLAS, MKL, ...) run on one thread."""
+@contextlib.contextmanager
+def blas_on_one_thread() -> Iterator[None]:
+    """A context in which the BLAS libraries of the process (OpenBLAS, MKL, ...) run on one thread; inside
+    one already (nested, on this thread) it does nothing (a sweep's points each miss a cache that guards)."""
     global _controller
+    if getattr(_inside, "guard", False):
+        yield
+        return
     if _controller is None:  # scanning the loaded libraries costs a few ms: once per process
         from threadpoolctl import ThreadpoolController
 
         _controller = ThreadpoolController()
-    return _controller.limit(limits=1, user_api="blas")
+    _inside.guard = True
+    try:
+        with _controller.limit(limits=1, user_api="blas"):
+            yield
+    finally:
+        _inside.guard = False
 
 
 def one_blas_thread(function: F) -> F:

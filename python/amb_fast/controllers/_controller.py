@@ -330,12 +330,12 @@ def _flatten(blocks: Sequence[Controller], kind: str) -> tuple[Controller, ...]:
     return tuple(p for b in blocks for p in (b._parts if b._kind == kind else (b,)))
 
 
-def _polymul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def _polymul(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     """``np.polymul``'s numbers without its two poly1d objects (each input's leading zeros trimmed, all
     zeros kept as ``[0]``): 40 us a call in sweeps that rebuild a controller per point."""
 
-    def trimmed(p: np.ndarray) -> np.ndarray:
-        p = np.atleast_1d(p)
+    def trimmed(given: ArrayLike) -> np.ndarray:
+        p = np.atleast_1d(given)
         nonzero = np.flatnonzero(p)
         return p[nonzero[0] :] if nonzero.size else np.zeros(1, dtype=p.dtype)
 
