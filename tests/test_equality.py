@@ -50,6 +50,14 @@ def test_the_same_seed_gives_an_equal_estimate_and_another_seed_does_not() -> No
     assert af.run_experiment(RIG, PID, SPHS, seed=3) != af.run_experiment(RIG, PID, SPHS, seed=4)
 
 
+def test_fields_declared_not_compared_are_not_compared() -> None:
+    """``meta`` (what produced the record) is ``field(compare=False)`` on estimates and traces, as before."""
+    estimate = af.run_experiment(RIG, PID, SPHS, seed=3)
+    assert replace(estimate, meta={"note": "another run"}) == estimate
+    trace = af.simulate(RIG, PID, np.zeros(50), seed=1)
+    assert replace(trace, meta={"note": "another run"}) == trace
+
+
 def test_equal_values() -> None:
     nan = np.array([1.0, np.nan])
     assert equal_values(nan, nan.copy())

@@ -2,9 +2,9 @@
 
 A dataclass's own ``==`` compares its fields as a tuple, which raises for array fields ("the truth value
 of an array ... is ambiguous"). Records that mix in :class:`ArrayRecord` (and pass ``eq=False`` to
-``@dataclass``) compare field by field instead: arrays by shape and value, NaN equal to NaN (a sweep's
-unstable rows, an unexcited line), dicts and sequences entry by entry. Being mutable-free but holding
-unhashable arrays, they are not hashable.
+``@dataclass``) compare field by field instead (the fields a dataclass would compare: not those declared
+``field(compare=False)``): arrays by shape and value, NaN equal to NaN (a sweep's unstable rows, an
+unexcited line), dicts and sequences entry by entry. They hold arrays, so they are not hashable.
 """
 
 from __future__ import annotations
@@ -39,6 +39,7 @@ class ArrayRecord:
     def __eq__(self, other: object) -> bool:
         if type(other) is not type(self):
             return NotImplemented
-        return all(equal_values(getattr(self, f.name), getattr(other, f.name)) for f in fields(self))  # type: ignore[arg-type]
+        return all(equal_values(getattr(self, f.name), getattr(other, f.name))
+                   for f in fields(self) if f.compare)  # type: ignore[arg-type]  # fmt: skip
 
     __hash__ = None  # type: ignore[assignment]  # arrays are not hashable

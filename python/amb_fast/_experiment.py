@@ -45,6 +45,9 @@ class UnexcitedLines(ArrayRecord):
 class Estimate(ArrayRecord):
     """Frequency-domain estimate at the excited lines (MODEL.md section 3).
 
+    Two estimates are ``==`` when every field but ``meta`` is equal (arrays value by value, NaN equal to
+    NaN): a rerun with the same seed gives an equal one.
+
     Attributes
     ----------
     freq : ndarray
