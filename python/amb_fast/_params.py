@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -271,12 +271,15 @@ def _modal(
     return [1.0] * i + [pole] * d, [integral_in] * i + [1.0] * d, [1.0] * i + [derivative_out] * d
 
 
+_RIG_FIELDS = tuple(f.name for f in fields(Rig))
+
+
 # The core's copies of the parameters, made once per distinct value (the dataclasses are frozen).
 @functools.lru_cache(maxsize=256)
 def _core_rig(rig: Rig) -> _core.Rig:
-    fields = dict(rig.__dict__)  # the fields, all scalars (asdict's deep copy costs 60 us)
-    fields["force_law"] = _core.ForceLaw.__members__[rig.force_law]
-    return _core.Rig(**fields)
+    values = {name: getattr(rig, name) for name in _RIG_FIELDS}  # all scalars: no deep copy (asdict: 60 us)
+    values["force_law"] = _core.ForceLaw.__members__[rig.force_law]
+    return _core.Rig(**values)
 
 
 @functools.lru_cache(maxsize=256)
