@@ -104,3 +104,17 @@ def test_points_at_the_stability_boundary_are_classified_as_run_experiment_does(
     ours, theirs = ta.closed_loop_poles(coupled, pid), np.linalg.eigvals(loop)
     gap = np.abs(theirs[:, None] - ours[None, :]).min(axis=1)
     assert gap.max() <= 1e-12 * np.abs(theirs).max()
+
+
+def test_each_point_loop_is_built_once() -> None:
+    """A core call takes hundreds of points, more than loop_model's cache holds: the sweep hands each
+    point's checked loop on instead of asking the cache again (which rebuilt most of them)."""
+    from amb_fast.two_axis import _model
+
+    coupled = ta.TwoAxisRig(x=af.Rig.paper(), y=af.Rig.paper(), kxy=2e3, kyx=-2e3)
+    kxy = np.linspace(0.0, 4e3, 100) + 0.123  # fresh points
+    _model._loop_model.cache_clear()
+    result = ta.sweep(coupled, af.PID.paper(), af.schroeder_multisine(f0=20.0, f_max=100.0), grid="zip", kxy=kxy,
+                      kyx=-kxy, periods=2, seed=1, progress=False)  # fmt: skip
+    assert result.stable.all()
+    assert _model._loop_model.cache_info().misses == kxy.size

@@ -256,20 +256,20 @@ def run_experiment(
 
 def _point_args(
     rig: TwoAxisRig, controller: ControllerSpec, excitation: Multisine, settle_periods: int | None, seed: int | None,
-    start: str, poles: np.ndarray | None = None,
+    start: str, checked: tuple[LoopModel, np.ndarray] | None = None,
 ) -> tuple[dict[str, np.ndarray], int, list[int]]:  # fmt: skip
     """What the core needs of one experiment pair (run_experiment, a sweep's point): the loop's model, the
-    settle periods and both experiments' seeds; :class:`UnstableLoopError` for an unstable loop. ``poles``:
-    the loop's, where already computed (and found stable) as :func:`require_stable` computes them."""
+    settle periods and both experiments' seeds; :class:`UnstableLoopError` for an unstable loop. ``checked``:
+    the loop and its poles, where a sweep has already built it and found it stable as :func:`require_stable`
+    does (its loops outnumber loop_model's cache)."""
     spec = controller_matrix(controller)
     require(excitation.fs == spec.fs, "excitation.fs", excitation.fs, f"equal to the controller's fs ({spec.fs} Hz)")
-    if poles is None:
-        poles = require_stable(rig, spec)
+    loop, poles = checked if checked is not None else (loop_model(rig, spec), require_stable(rig, spec))
     if settle_periods is None:
         settle_periods = 0 if start == "steady" else _settle(rig, spec.fs, poles, excitation.period_samples)
     settle = integer("settle_periods", settle_periods, 0)
     s = seed_value(seed)
-    return _core_args(loop_model(rig, spec), rig, outputs=2), settle, [s, (s ^ 0xA5A5A5A5DEADBEEF) % 2**64]
+    return _core_args(loop, rig, outputs=2), settle, [s, (s ^ 0xA5A5A5A5DEADBEEF) % 2**64]
 
 
 def _settle(rig: TwoAxisRig, fs: float, poles: np.ndarray, period: int) -> int:

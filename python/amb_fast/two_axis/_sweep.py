@@ -220,8 +220,8 @@ def _prepared(
         for j, eigenvalues in zip(same, _eigenvalues(np.stack([loops[j].M for j in same]), workers)):
             poles[j] = eigenvalues
     stable = [not _unstable_poles(p).size for p in poles]  # require_stable's test
-    return [_point_args(*model, excitation, settle_periods, int(seed), start, p) if ok else None
-            for model, seed, p, ok in zip(models, seeds, poles, stable)]  # fmt: skip
+    return [_point_args(*model, excitation, settle_periods, int(seed), start, (loop, p)) if ok else None
+            for model, seed, loop, p, ok in zip(models, seeds, loops, poles, stable)]  # fmt: skip
 
 
 def _point(model: tuple[TwoAxisRig, Any], seed: int, **options: Any) -> Estimate2 | None:
