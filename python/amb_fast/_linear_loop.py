@@ -198,15 +198,14 @@ def controller_matrices(controller: AnyController) -> tuple[np.ndarray, np.ndarr
 
 
 def loop_matrix(
-    Phi: np.ndarray, Gamma: np.ndarray, sensor: np.ndarray, Ac: np.ndarray, Bc: np.ndarray, Cc: np.ndarray,
-    Dc: np.ndarray,
-) -> np.ndarray:  # fmt: skip
-    """The closed loop's state matrix ``[[Phi + gu Dc S, gu Cc], [Bc S, Ac]]`` (``gu``: the command's column
-    of ``Gamma``, ``S``: the sensor row), assembled in place (np.block costs more than the products)."""
+    Phi: np.ndarray, Gu: np.ndarray, S: np.ndarray, Ac: np.ndarray, Bc: np.ndarray, Cc: np.ndarray, Dc: np.ndarray
+) -> np.ndarray:
+    """The closed loop's state matrix ``[[Phi + Gu Dc S, Gu Cc], [Bc S, Ac]]`` (``Gu``: the commands' columns
+    of ``Gamma``, ``S``: the sensor rows; one axis or two), assembled in place (np.block costs more than the
+    products, and sweeps build many)."""
     n, m = Phi.shape[0], Ac.shape[0]
-    gu = Gamma[:, 1:2]
     A = np.empty((n + m, n + m))
-    A[:n, :n], A[:n, n:], A[n:, :n], A[n:, n:] = Phi + gu @ Dc @ sensor, gu @ Cc, Bc @ sensor, Ac
+    A[:n, :n], A[:n, n:], A[n:, :n], A[n:, n:] = Phi + Gu @ Dc @ S, Gu @ Cc, Bc @ S, Ac
     return A
 
 
@@ -224,7 +223,7 @@ def closed_loop(rig: Rig, controller: AnyController) -> tuple[np.ndarray, np.nda
     n, m = len(states), Ac.shape[0]
     sensor = sensor_row(states)
     gf = Gamma[:, 0:1]
-    A = loop_matrix(Phi, Gamma, sensor, Ac, Bc, Cc, Dc)
+    A = loop_matrix(Phi, Gamma[:, 1:2], sensor, Ac, Bc, Cc, Dc)
     B = np.vstack([gf, np.zeros((m, 1))])
     command = np.hstack([Dc @ sensor, Cc])
     samples = split_dead_time(rig.dead_time, controller.fs)[0]

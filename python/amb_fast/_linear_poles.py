@@ -115,8 +115,9 @@ def _affine_closed_loop(
     # closed_loop(rig, replace(pid, kp=..., ki=..., kd=...))[0] at the base gains and one step in each
     first, *rest = _pid_steps(pid, with_integral, with_derivative)
     assert first is not None
-    base = loop_matrix(Phi, Gamma, sensor, *first)
-    return base, np.array([np.zeros_like(base) if m is None else loop_matrix(Phi, Gamma, sensor, *m) - base
+    gu = Gamma[:, 1:2]
+    base = loop_matrix(Phi, gu, sensor, *first)
+    return base, np.array([np.zeros_like(base) if m is None else loop_matrix(Phi, gu, sensor, *m) - base
                            for m in rest])  # fmt: skip
 
 
