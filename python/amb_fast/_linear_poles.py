@@ -68,7 +68,8 @@ def require_stable(rig: Rig, controller: AnyController) -> np.ndarray:
 
 
 def _unstable_poles(poles: np.ndarray) -> np.ndarray:
-    """The poles on or outside the unit circle: the one test of stability of runs and sweeps, one axis or two."""
+    """The poles on or outside the unit circle: the stability test of runs (one axis or two) and of two-axis
+    sweeps; one-axis sweeps compare each point's spectral radius with 1 (here, or in the core's threads)."""
     return poles[np.abs(poles) >= 1.0]
 
 
