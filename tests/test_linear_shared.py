@@ -11,7 +11,7 @@ import pytest
 
 import amb_fast as af
 from amb_fast import two_axis as ta
-from amb_fast._linear import _response
+from amb_fast._linear import state_response
 
 QUIET = replace(af.Rig.paper(), sensor_noise=0.0, force_noise=0.0)
 
@@ -23,7 +23,8 @@ def test_uncoupled_two_axis_plant_holds_each_one_axis_plant(dead_x: float, dead_
     Phi2, Gamma2, names = ta.discrete_plant2(ta.TwoAxisRig(x=x, y=y), 4000.0)
     for axis, (name, rig) in enumerate((("x", x), ("y", y))):
         Phi, Gamma, states = af._linear.discrete_plant(rig, 4000.0)
-        rows = [names.index(f"{name}.{s}") for s in states]
+        # The N-axis plant names a coordinate's position and velocity "x", "x'"; the chain "x.i", "x.dead1".
+        rows = [names.index({"y": name, "v": f"{name}'"}.get(s, f"{name}.{s}")) for s in states]
         np.testing.assert_array_equal(Phi2[np.ix_(rows, rows)], Phi)
         np.testing.assert_array_equal(Gamma2[np.ix_(rows, [axis, 2 + axis])], Gamma)
         others = np.setdiff1d(np.arange(len(names)), rows)
@@ -34,9 +35,9 @@ def test_response_frequency_first_is_the_same_numbers() -> None:
     rng = np.random.default_rng(1)
     A, B, C = rng.normal(size=(9, 9)), rng.normal(size=(9, 2)), rng.normal(size=(4, 9))
     z = np.exp(2j * np.pi * rng.uniform(0.0, 0.5, 50))
-    stacked = _response(A, B, C, z, frequency_first=True)
+    stacked = state_response(A, B, C, z, frequency_first=True)
     assert stacked.shape == (50, 4, 2) and stacked.flags.c_contiguous
-    np.testing.assert_array_equal(stacked, np.moveaxis(_response(A, B, C, z), -1, 0))
+    np.testing.assert_array_equal(stacked, np.moveaxis(state_response(A, B, C, z), -1, 0))
 
 
 def test_unstable_messages_of_one_and_two_axes() -> None:

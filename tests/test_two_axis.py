@@ -145,11 +145,18 @@ def test_effective_matrices() -> None:
     np.testing.assert_allclose(C[:, 0, 1], 2.0)
     K0, _ = ta.effective_coefficients(rig, PID, freq, process=False)
     np.testing.assert_allclose(K0[:, 0, 1], 0.0, atol=1e-9)
-    # Rotated probes: the controller acts on R^T q, so the bearing's force couples the axes.
+    # Rotated probes: the controller acts on R^T q, so at the bearing the force couples the axes by
+    # kiy G R^T; the estimate F Y^-1 reads Y = R^T q, so in its frame that is (diag(kyy) + kiy G R^T) R =
+    # diag(kyy) R + kiy G: the magnets' negative stiffness turns with the probes, the controller's does not.
     turned = replace(rig, sensor_angle=0.1)
-    Kt, _ = ta.effective_coefficients(turned, PID, freq, process=False)
-    np.testing.assert_allclose(Kt[:, 0, 1], QUIET.kiy * np.sin(0.1) * af.effective_coefficients(
-        af.Rig(kyy=0.0 + 1e-300, kiy=1.0), PID, freq)[0], rtol=1e-9)  # fmt: skip
+    Kt, Ct = ta.effective_coefficients(turned, PID, freq, process=False)
+    g = af.effective_coefficients(af.Rig(kyy=1e-300, kiy=1.0), PID, freq)
+    np.testing.assert_allclose(Kt[:, 0, 1], -QUIET.kyy * np.sin(0.1), rtol=1e-12)
+    np.testing.assert_allclose(Kt[:, 1, 0], QUIET.kyy * np.sin(0.1), rtol=1e-12)
+    np.testing.assert_allclose(Kt[:, 0, 0], QUIET.kyy * np.cos(0.1) + QUIET.kiy * g[0], rtol=1e-12)
+    np.testing.assert_allclose(Ct[:, 1, 1], QUIET.kiy * g[1], rtol=1e-12)
+    # The same through a noise-free experiment's frame: F Y^-1 of the exact receptance, with the actual
+    # minus effective difference the same as with aligned probes (the lags act per axis, before R).
 
 
 def test_controller_specs_and_validation() -> None:

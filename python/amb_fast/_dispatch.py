@@ -1,9 +1,9 @@
-"""One API for one and two axes: a function given a ``TwoAxisRig`` runs its two-axis version.
+"""One API for any number of axes: a function given a rig of N axes runs that rig's implementation.
 
-The two-axis model lives in :mod:`amb_fast.two_axis` under the same names and signatures; the one-axis
-functions hand a :class:`~amb_fast.TwoAxisRig` over to it, so users call ``af.predict(rig, ...)``
-whatever the rig. ``two_axis`` is imported only when a two-axis rig is met (it imports the one-axis
-modules itself).
+The one-axis functions are decorated here; the packages of rigs with more axes register their rig
+types and the namespace that holds their implementations under the same names (:func:`register`), so
+``af.predict(rig, ...)`` works whatever the rig, and this lower layer never imports a higher one: a rig
+of a registered type exists only once its package has been imported.
 """
 
 from __future__ import annotations
@@ -17,13 +17,22 @@ import numpy as np
 
 F = TypeVar("F", bound=Callable[..., Any])
 
+_SYSTEMS: dict[type, Any] = {}
+_RECORDINGS: dict[int, Callable[..., Any]] = {}
 
-def _is_two_axis(value: Any) -> bool:
-    return type(value).__name__ == "TwoAxisRig" and type(value).__module__.startswith("amb_fast.two_axis")
+
+def register(rig_type: type, namespace: Any) -> None:
+    """Route the decorated functions given a ``rig_type`` to ``namespace``'s functions of the same names."""
+    _SYSTEMS[rig_type] = namespace
+
+
+def register_recordings(axes: int, identify: Callable[..., Any]) -> None:
+    """Route :func:`identify` given recordings of shape (axes, samples, axes) (experiment, sample, axis)."""
+    _RECORDINGS[axes] = identify
 
 
 def _note(doc: str | None, sentence: str) -> str | None:
-    """The docstring with a sentence saying where two axes go, after the summary paragraph."""
+    """The docstring with a sentence saying where more axes go, after the summary paragraph."""
     if not doc:
         return doc
     summary, _, rest = doc.partition("\n\n")
@@ -32,36 +41,41 @@ def _note(doc: str | None, sentence: str) -> str | None:
     return f"{summary}\n\n{text}\n\n{rest}" if rest else f"{summary}\n\n{text}\n"
 
 
-def two_axis_aware(function: F) -> F:
+def axes_aware(function: F) -> F:
     """Decorate a one-axis function whose first argument is the rig."""
     name = function.__name__
 
     @functools.wraps(function)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         rig = args[0] if args else kwargs.get("rig")
-        if _is_two_axis(rig):
-            from . import two_axis
-
-            return getattr(two_axis, name)(*args, **kwargs)
+        namespace = _SYSTEMS.get(type(rig))
+        if namespace is not None:
+            implementation = getattr(namespace, name, None)
+            if implementation is None:
+                raise TypeError(f"{name} does not take a {type(rig).__name__} yet")
+            return implementation(*args, **kwargs)
         return function(*args, **kwargs)
 
     wrapper.__doc__ = _note(
         function.__doc__,
-        f"A :class:`~amb_fast.TwoAxisRig` in place of the rig runs :func:`amb_fast.two_axis.{name}` (same "
-        "arguments; 2x2 results).",
+        f"A :class:`~amb_fast.TwoAxisRig` or a :class:`~amb_fast.RotorRig` in place of the rig runs its N-axis "
+        f"``{name}`` (same arguments; N x N results).",
     )
     return wrapper  # type: ignore[return-value]
 
 
-def two_recordings_aware(function: F) -> F:
-    """Decorate ``identify``: two experiments' two-channel recordings, shape (2, n, 2), go to two axes."""
+def recordings_aware(function: F) -> F:
+    """Decorate ``identify``: N experiments' N-channel recordings, shape (N, n, N), go to N axes."""
 
     @functools.wraps(function)
     def wrapper(force: Any, displacement: Any, *args: Any, **kwargs: Any) -> Any:
-        if np.ndim(force) == 3:
-            from . import two_axis
-
-            return two_axis.identify(force, displacement, *args, **kwargs)
+        shape = np.shape(force)
+        if len(shape) == 3:
+            handler = _RECORDINGS.get(shape[0])
+            if handler is None:
+                raise ValueError(f"force shape {shape}: recordings of N experiments, (N, samples, N), are read for "
+                                 f"N in {sorted(_RECORDINGS)} (import amb_fast.two_axis for two axes)")  # fmt: skip
+            return handler(force, displacement, *args, **kwargs)
         return function(force, displacement, *args, **kwargs)
 
     wrapper.__doc__ = _note(

@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _checks, _core
-from ._dispatch import two_axis_aware, two_recordings_aware
+from ._dispatch import axes_aware, recordings_aware
 from ._equality import ArrayRecord
 from ._excitation import Multisine, period_samples
 from ._linear import AnyController, core_controller, require_stable, settle_periods_for, settling_radius
@@ -211,7 +211,7 @@ def automatic_settle(rig: Rig, controller: AnyController, radius: float, period:
     return periods
 
 
-@two_axis_aware
+@axes_aware
 def run_experiment(
     rig: Rig,
     controller: AnyController,
@@ -292,7 +292,7 @@ def run_experiment(
     return _estimate(raw, harmonics, unexcited, excitation.f0, saturated=int(raw.saturated_samples), meta=meta)
 
 
-@two_recordings_aware
+@recordings_aware
 def identify(
     force: ArrayLike,
     displacement: ArrayLike,

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any, Union
 import numpy as np
 from scipy.linalg import expm
 
-from ._dispatch import two_axis_aware
+from ._dispatch import axes_aware
 from ._params import PID, Rig
 from ._validate import rig_and_controller
 
@@ -80,7 +80,7 @@ def split_dead_time(dead_time: float, fs: float) -> tuple[int, float]:
     return samples, max(0.0, dead_time - samples * T)
 
 
-def _zoh(A: np.ndarray, B: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
+def zoh(A: np.ndarray, B: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
     """Exact zero-order-hold ``Phi``, ``Gamma`` over ``h`` via the augmented matrix exponential."""
     n, m = B.shape
     M = np.zeros((n + m, n + m))
@@ -116,7 +116,7 @@ def _discrete_plant(rig: Rig, fs: float) -> tuple[np.ndarray, np.ndarray, tuple[
 def _discretised(rig: Rig, fs: float) -> tuple[np.ndarray, np.ndarray, list[str]]:
     A, B, states = plant_matrices(rig)
     T = 1.0 / fs
-    Phi, Gamma = _zoh(A, B, T)
+    Phi, Gamma = zoh(A, B, T)
     samples, fraction = split_dead_time(rig.dead_time, fs)
     line = samples + (fraction > 0)
     if line == 0:
@@ -126,13 +126,13 @@ def _discretised(rig: Rig, fs: float) -> tuple[np.ndarray, np.ndarray, list[str]
     Gamma2 = np.zeros((n + line, 2))
     Phi2[:n, :n] = Phi
     Gamma2[:n, 0] = Gamma[:, 0]
-    Gamma2[:n, 1], Phi2[:n, n:] = _dead_time_columns(A, B, Gamma, 1, T, (samples, fraction))
+    Gamma2[:n, 1], Phi2[:n, n:] = dead_time_columns(A, B, Gamma, 1, T, (samples, fraction))
     Gamma2[n, 1] = 1.0  # dead1' = u
     Phi2[n:, n:] = np.eye(line, k=-1)  # dead(j+1)' = dead(j)
     return Phi2, Gamma2, states + [f"dead{j + 1}" for j in range(line)]
 
 
-def _dead_time_columns(
+def dead_time_columns(
     A: np.ndarray, B: np.ndarray, Gamma: np.ndarray, col: int, T: float, split: tuple[int, float]
 ) -> tuple[np.ndarray, np.ndarray]:
     """How the command of input ``col`` reaches the sampled plant when it arrives ``split = (m, delta)``
@@ -144,8 +144,8 @@ def _dead_time_columns(
     n = A.shape[0]
     G0, G1 = Gamma[:, col], np.zeros(n)
     if fraction > 0:
-        late_Phi, late_Gamma = _zoh(A, B, T - fraction)
-        G0, G1 = late_Gamma[:, col], late_Phi @ _zoh(A, B, fraction)[1][:, col]
+        late_Phi, late_Gamma = zoh(A, B, T - fraction)
+        G0, G1 = late_Gamma[:, col], late_Phi @ zoh(A, B, fraction)[1][:, col]
     delayed = np.zeros((n, samples + (fraction > 0)))
     if samples > 0:
         delayed[:, samples - 1] = G0
@@ -209,7 +209,7 @@ def loop_matrix(
     return A
 
 
-@two_axis_aware
+@axes_aware
 def closed_loop(rig: Rig, controller: AnyController) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The linear loop as one discrete state space ``(A, B, C, D)`` with sample period ``1/fs``.
 

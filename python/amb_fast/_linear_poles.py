@@ -15,14 +15,14 @@ from numpy.typing import ArrayLike
 
 from . import _core
 from ._blas import one_blas_thread
-from ._dispatch import two_axis_aware
+from ._dispatch import axes_aware
 from ._errors import UnstableLoopError
 from ._linear_loop import AnyController, closed_loop, controller_matrices, discrete_plant, loop_matrix, sensor_row
 from ._params import PID, Rig
 from ._validate import require, rig_and_controller
 
 
-@two_axis_aware
+@axes_aware
 def closed_loop_poles(rig: Rig, controller: AnyController) -> np.ndarray:
     """Poles of the linearised sampled-data loop in the z-plane (stable: all ``|z| < 1``).
 
@@ -34,15 +34,15 @@ def closed_loop_poles(rig: Rig, controller: AnyController) -> np.ndarray:
 
 def loop_poles(rig: Rig, controller: AnyController) -> np.ndarray:
     """The closed-loop poles as every run and sweep computes them (so they choose the same settling and
-    flag the same points unstable): the core's eigenvalues (:func:`_eigenvalues`) of, for a PID, the
+    flag the same points unstable): the core's eigenvalues (:func:`eigenvalues`) of, for a PID, the
     affine stack of :func:`spectral_radius`, else :func:`closed_loop`'s matrix."""
     if isinstance(controller, PID):
         ((_, stack),) = _closed_loop_stacks(rig, controller, _gain_arrays(controller, None, None, None))
-        return _eigenvalues(stack)[0]
-    return _eigenvalues(closed_loop(rig, controller)[0][None])[0]
+        return eigenvalues(stack)[0]
+    return eigenvalues(closed_loop(rig, controller)[0][None])[0]
 
 
-def _eigenvalues(stack: np.ndarray, workers: int = 1) -> np.ndarray:
+def eigenvalues(stack: np.ndarray, workers: int = 1) -> np.ndarray:
     """Eigenvalues of a stack of square matrices (count, m, m), in the core on up to ``workers`` threads
     (one per 128 matrices of 7x7, the work growing as m^3: starting a thread costs about fifty 7x7
     solves): one function for single runs and sweeps, so both see the same digits."""
@@ -64,7 +64,7 @@ def require_stable(rig: Rig, controller: AnyController) -> np.ndarray:
             what = repr(controller)
         return f"the closed loop is unstable with {what}"
 
-    return _checked_poles(loop_poles(rig, controller), loop)
+    return checked_poles(loop_poles(rig, controller), loop)
 
 
 def _unstable_poles(poles: np.ndarray) -> np.ndarray:
@@ -73,7 +73,7 @@ def _unstable_poles(poles: np.ndarray) -> np.ndarray:
     return poles[np.abs(poles) >= 1.0]
 
 
-def _checked_poles(poles: np.ndarray, loop: Callable[[], str]) -> np.ndarray:
+def checked_poles(poles: np.ndarray, loop: Callable[[], str]) -> np.ndarray:
     """``poles``, made read-only, or :class:`UnstableLoopError` naming the unstable ones after ``loop()``
     ("the closed loop is unstable with ...")."""
     poles.flags.writeable = False
@@ -179,7 +179,7 @@ def _radius_of_gains(rig: Rig, pid: PID, gains: np.ndarray, workers: int = 1) ->
     """:func:`spectral_radius` of the gain sets already laid out by :func:`_gain_arrays` (sweeps)."""
     radius = np.empty(len(gains))
     for rows, stack in _closed_loop_stacks(rig, pid, gains):
-        radius[rows] = np.max(np.abs(_eigenvalues(stack, workers)), axis=-1)
+        radius[rows] = np.max(np.abs(eigenvalues(stack, workers)), axis=-1)
     return radius
 
 

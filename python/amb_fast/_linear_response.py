@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._dispatch import two_axis_aware
+from ._dispatch import axes_aware
 from ._linear_loop import (
     AnyController,
     DesignController,
@@ -34,7 +34,7 @@ def _frequencies(freq: ArrayLike, fs: float | None = None) -> np.ndarray:
     return f
 
 
-def _response(
+def state_response(
     A: np.ndarray, B: np.ndarray, C: np.ndarray, z: np.ndarray, *, frequency_first: bool = False
 ) -> np.ndarray:
     """C (zI - A)^-1 B for each z; shape (outputs, inputs, len(z)), or with ``frequency_first`` (len(z),
@@ -45,7 +45,7 @@ def _response(
     return np.einsum("on,fni->foi" if frequency_first else "on,fni->oif", C, X)
 
 
-@two_axis_aware
+@axes_aware
 def predict(
     rig: Rig,
     pid: AnyController,
@@ -71,7 +71,7 @@ def predict(
     z = np.exp(2j * np.pi * f.ravel() / pid.fs)
     if kp is None and ki is None and kd is None:
         A, B, C, _ = closed_loop(rig, pid)
-        return (_response(A, B, C[:1], z)[0, 0] / transducer_response(rig, pid.fs, z)).reshape(f.shape)
+        return (state_response(A, B, C[:1], z)[0, 0] / transducer_response(rig, pid.fs, z)).reshape(f.shape)
     if not isinstance(pid, PID):
         raise ValueError(f"kp, ki, kd arrays need a PID controller, got {type(pid).__name__}")
     gains = _gain_arrays(pid, kp, ki, kd)
@@ -92,7 +92,7 @@ def transducer_response(rig: Rig, fs: float, z: np.ndarray) -> np.ndarray:
 def _plant_responses(rig: Rig, fs: float, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Sampled plant responses from force and from current command to the sensor, at ``f`` (Hz)."""
     Phi, Gamma, states = discrete_plant(rig, fs)
-    response = _response(Phi, Gamma, sensor_row(states), np.exp(2j * np.pi * f / fs))[0]
+    response = state_response(Phi, Gamma, sensor_row(states), np.exp(2j * np.pi * f / fs))[0]
     return response[0], response[1]
 
 
@@ -140,7 +140,7 @@ def iso_zone(peak: float) -> str:
     return "A" if peak < 3 else "B" if peak < 4 else "C" if peak < 5 else "D"
 
 
-@two_axis_aware
+@axes_aware
 def sensitivity(rig: Rig, pid: AnyController, freq: ArrayLike) -> np.ndarray:
     """Sensitivity S = 1/(1 + L) with the loop broken at the controller output, at ``freq`` (Hz)."""
     rig_and_controller(rig, pid, "sensitivity")
@@ -148,12 +148,12 @@ def sensitivity(rig: Rig, pid: AnyController, freq: ArrayLike) -> np.ndarray:
     Phi, Gamma, states = discrete_plant(rig, pid.fs)
     Ac, Bc, Cc, Dc = controller_matrices(pid)
     z = np.exp(2j * np.pi * f.ravel() / pid.fs)
-    plant = _response(Phi, Gamma[:, 1:2], sensor_row(states), z)[0, 0]  # i_cmd -> ys (negative gain: -Kiy)
-    control = Dc[0, 0] + (_response(Ac, Bc, Cc, z)[0, 0] if Ac.size else 0.0)
+    plant = state_response(Phi, Gamma[:, 1:2], sensor_row(states), z)[0, 0]  # i_cmd -> ys (negative gain: -Kiy)
+    control = Dc[0, 0] + (state_response(Ac, Bc, Cc, z)[0, 0] if Ac.size else 0.0)
     return (1.0 / (1.0 - plant * control)).reshape(f.shape)
 
 
-@two_axis_aware
+@axes_aware
 def stability_margin(rig: Rig, pid: AnyController, points: int = 20_000) -> StabilityMargin:
     """Peak of |S| over ``points`` log-spaced frequencies from 0.01 Hz to just below Nyquist."""
     rig_and_controller(rig, pid, "stability_margin")
@@ -197,7 +197,7 @@ def controller_response(controller: DesignController, freq: np.ndarray, *, discr
     return np.asarray(function(s), dtype=complex) * np.ones_like(s)
 
 
-@two_axis_aware
+@axes_aware
 def effective_coefficients(
     rig: Rig,
     controller: DesignController,

@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _core
-from ._dispatch import two_axis_aware
+from ._dispatch import axes_aware
 from ._equality import ArrayRecord
 from ._linear import AnyController, core_controller, require_stable
 from ._params import Rig
@@ -56,7 +56,7 @@ class Trace(ArrayRecord):
         save_recording(path, force=self.force, displacement=self.displacement, fs=self.fs, meta=self.meta)
 
 
-@two_axis_aware
+@axes_aware
 def simulate(rig: Rig, controller: AnyController, force: ArrayLike, *, seed: int | None = None) -> Trace:
     """Run the closed loop on a force sequence (N) sampled at the controller's ``fs``, from rest.
 

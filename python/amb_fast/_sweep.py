@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike
 
 from . import _core
 from ._blas import blas_on_one_thread
-from ._dispatch import two_axis_aware
+from ._dispatch import axes_aware
 from ._excitation import Multisine
 from ._experiment import _plan, _window, automatic_settle
 from ._linear import AnyController, _gain_arrays, core_controller, is_controller, loop_poles
@@ -236,7 +236,7 @@ def _progress_bar(progress: bool | None, total: int):  # noqa: ANN202
     return tqdm(total=total, unit="point", desc="sweep")
 
 
-@two_axis_aware
+@axes_aware
 def sweep(
     rig: Rig | Factory,
     controller: AnyController | Multisine,

@@ -23,7 +23,7 @@ def magnet_force(rig: Rig, y: float, i: float) -> float:
     return km * ((i0 - i) ** 2 / (g - y) ** 2 - (i0 + i) ** 2 / (g + y) ** 2)
 
 
-def _zoh(A: np.ndarray, B: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
+def zoh(A: np.ndarray, B: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
     n = A.shape[0]
     Phi, Gamma, *_ = cont2discrete((A, B, np.eye(n), np.zeros((n, B.shape[1]))), h, method="zoh")
     return Phi, Gamma
@@ -77,9 +77,9 @@ def simulate(rig: Rig, pid: AnyController, force: np.ndarray) -> tuple[np.ndarra
     A, B, states = plant_matrices(rig)
     n = len(states)
     whole, fraction = _dead_time(rig, T)
-    Phi, Gamma = _zoh(A, B, T)
+    Phi, Gamma = zoh(A, B, T)
     if fraction > 0:
-        early, late = _zoh(A, B, fraction), _zoh(A, B, T - fraction)
+        early, late = zoh(A, B, fraction), zoh(A, B, T - fraction)
     sensed = states.index("ys") if "ys" in states else 0
     law = _Law(pid)
 
@@ -138,12 +138,12 @@ def receptance(rig: Rig, pid: AnyController, freq: np.ndarray) -> np.ndarray:
     A, B, states = plant_matrices(rig)
     n = len(states)
     sensed = states.index("ys") if "ys" in states else 0
-    Phi, Gamma = _zoh(A, B, T)
+    Phi, Gamma = zoh(A, B, T)
     z = np.exp(2j * np.pi * np.asarray(freq, dtype=float) * T)
     whole, fraction = _dead_time(rig, T)
     if fraction > 0:  # the command reaches the plant as G0 u[k] + G1 u[k-1] (then the whole samples)
-        late_Phi, late_Gamma = _zoh(A, B, T - fraction)
-        G0, G1 = late_Gamma[:, 1], late_Phi @ _zoh(A, B, fraction)[1][:, 1]
+        late_Phi, late_Gamma = zoh(A, B, T - fraction)
+        G0, G1 = late_Gamma[:, 1], late_Phi @ zoh(A, B, fraction)[1][:, 1]
     else:
         G0, G1 = Gamma[:, 1], np.zeros(n)
     P = np.array(

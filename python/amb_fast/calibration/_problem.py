@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .._linear import _plant_responses, _response, controller_matrices, is_controller, transducer_response
+from .._linear import _plant_responses, controller_matrices, is_controller, state_response, transducer_response
 from .._params import Rig
 
 # Rig fields the linear response depends on: (scale of the fit, unit). "log": fitted as ln(value)
@@ -201,7 +201,7 @@ class _Model:
         self.G = []
         for d, rows in zip(data, self.index):
             A, B, C, D = controller_matrices(d.controller)
-            G = D[0, 0] + (_response(A, B, C, self.z[rows])[0, 0] if A.size else 0.0)
+            G = D[0, 0] + (state_response(A, B, C, self.z[rows])[0, 0] if A.size else 0.0)
             self.G.append(G)
 
     def __call__(self, rig: Rig) -> list[np.ndarray]:

@@ -11,6 +11,9 @@ with a :class:`TwoAxisRig` in place of a :class:`~amb_fast.Rig`.
 
 from __future__ import annotations
 
+import sys
+
+from .._dispatch import register, register_recordings
 from ._experiment import SIGNS, Estimate2, Trace2, excitation_pair, identify, run_experiment, simulate
 from ._model import (
     ControllerMatrix,
@@ -71,3 +74,6 @@ __all__ = [
     "sweep",
     "to_ross",
 ]
+
+register(TwoAxisRig, sys.modules[__name__])
+register_recordings(2, identify)

@@ -8,6 +8,7 @@ import numpy as np
 
 from .._params import Rig
 from .._validate import real, require
+from ..system._mechanics import Mechanics
 
 
 @dataclass(frozen=True)
@@ -85,3 +86,10 @@ class TwoAxisRig:
         """``R(sensor_angle)``: probe axes in actuator coordinates (columns)."""
         c, s = np.cos(self.sensor_angle), np.sin(self.sensor_angle)
         return np.array([[c, -s], [s, c]])
+
+    def mechanics(self) -> Mechanics:
+        """The rotor at the bearing plane as a structure of two coordinates ``(x, y)``: mass ``m I``, the
+        process, actuators on ``x`` and ``y``, probes reading ``R^T q`` and reported as they read."""
+        m = self.mass
+        return Mechanics(m * np.eye(2), np.zeros((2, 2)), self.process_stiffness, self.process_damping, np.eye(2),
+                         self.rotation.T, np.eye(2), 0.0, ("x", "y"), ("x", "y"))  # fmt: skip

@@ -19,7 +19,7 @@ from .._blas import one_blas_thread
 from .._equality import ArrayRecord
 from .._errors import UnstableLoopError
 from .._excitation import Multisine, schroeder_multisine
-from .._linear import AnyController, _eigenvalues, _unstable_poles
+from .._linear import AnyController, _unstable_poles, eigenvalues
 from .._params import PID, Rig
 from .._sweep import _grid, _progress_bar, point_seeds, points_per_call
 from .._validate import integer, require, seed_value
@@ -217,8 +217,8 @@ def _prepared(
     for j, loop in enumerate(loops):
         sizes.setdefault(loop.M.shape[0], []).append(j)
     for same in sizes.values():
-        for j, eigenvalues in zip(same, _eigenvalues(np.stack([loops[j].M for j in same]), workers)):
-            poles[j] = eigenvalues
+        for j, values in zip(same, eigenvalues(np.stack([loops[j].M for j in same]), workers)):
+            poles[j] = values
     stable = [not _unstable_poles(p).size for p in poles]  # require_stable's test
     return [_point_args(*model, excitation, settle_periods, int(seed), start, (loop, p)) if ok else None
             for model, seed, loop, p, ok in zip(models, seeds, loops, poles, stable)]  # fmt: skip

@@ -1,0 +1,46 @@
+"""One model of N controlled axes: a structure that moves, each axis' chain, a controller matrix.
+
+A structure (:class:`Mechanics`: the platform, the planar mass of :class:`~amb_fast.TwoAxisRig`, the
+:class:`RigidRotor`) with one :class:`~amb_fast.Rig` chain per axis (actuator, probe, transducer) is
+assembled into one linear sampled-data loop (:mod:`._model`); predictions, poles, sensitivity and
+effective coefficients are N x N; the rotor's experiments and its Campbell diagram run on it.
+"""
+
+from __future__ import annotations
+
+from ._control import ControllerMatrix, ControllerSpec, controller_matrix
+from ._mechanics import Mechanics
+from ._model import (
+    LoopModel,
+    StabilityMarginN,
+    closed_loop,
+    closed_loop_poles,
+    discrete_plant,
+    effective_coefficients,
+    loop_model,
+    plant,
+    predict,
+    sensitivity,
+    stability_margin,
+)
+from ._rotor import RigidRotor, RotorRig
+
+__all__ = [
+    "ControllerMatrix",
+    "ControllerSpec",
+    "LoopModel",
+    "Mechanics",
+    "RigidRotor",
+    "RotorRig",
+    "StabilityMarginN",
+    "closed_loop",
+    "closed_loop_poles",
+    "controller_matrix",
+    "discrete_plant",
+    "effective_coefficients",
+    "loop_model",
+    "plant",
+    "predict",
+    "sensitivity",
+    "stability_margin",
+]

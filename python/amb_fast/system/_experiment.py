@@ -1,0 +1,234 @@
+"""N axes on the compiled dense loop: simulation, the N experiments with Hadamard signs, the N x N estimate.
+
+Experiment ``e`` drives axis ``j``'s shaker with ``signs[e, j] s`` (``s``: the multisine), so the force
+matrix at every line is ``s`` times a Hadamard matrix: invertible. ``H = F Y^-1`` per line with ``F`` the
+recorded forces at the bearing planes and ``Y`` the displacements the structure reports (the probes'
+readings through its ``readout``: at the bearing planes for a rotor); the actual coefficients remove the
+structure's own known dynamics, ``K + j w C = H + w^2 Mb - j w W Gb`` (paper eq. 9).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Literal
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import ArrayLike
+
+from .. import _core
+from .._equality import ArrayRecord
+from .._excitation import Multisine
+from .._experiment import MAX_AUTOMATIC_SETTLE
+from .._linear import settle_periods_for
+from .._validate import integer, require, seed_value
+from ._control import ControllerSpec, controller_matrix
+from ._mechanics import Mechanics
+from ._model import LoopModel, System, known_dynamics, loop_model, require_stable
+
+
+def hadamard_signs(n: int) -> np.ndarray:
+    """(n experiments, n axes) force signs: the first ``n`` rows and columns of a Sylvester Hadamard matrix
+    (one axis ``[[1]]``; two ``[[1, 1], [1, -1]]``), invertible for every ``n`` up to 4 and all powers of 2."""
+    size = 1 << max(0, (n - 1).bit_length())
+    return scipy.linalg.hadamard(size).astype(float)[:n, :n]
+
+
+@dataclass(frozen=True, eq=False)
+class TraceN(ArrayRecord):
+    """Recorded channels of one run of N axes, sampled at ``fs``; one column per axis.
+
+    Attributes
+    ----------
+    force : ndarray
+        (n, N) recorded forces at the bearing planes, N (through each transducer, plus its noise).
+    displacement : ndarray
+        (n, N) probe readings, m (at the probes' planes, through each probe's lag, plus noise).
+    current : ndarray
+        (n, N) coil control currents, A.
+    fs : float
+        Hz.
+    axes : tuple of str
+        The axes' names.
+    """
+
+    force: np.ndarray
+    displacement: np.ndarray
+    current: np.ndarray
+    fs: float
+    axes: tuple[str, ...]
+
+    @cached_property
+    def time(self) -> np.ndarray:
+        """Sample instants kT, s (computed once, read-only)."""
+        t = np.arange(self.force.shape[0]) / self.fs
+        t.flags.writeable = False
+        return t
+
+
+def core_args(model: LoopModel, system: System, outputs: int | None = None) -> dict[str, np.ndarray]:
+    """The core's model; ``outputs`` keeps the first rows only (experiments need the probes' N)."""
+    rows = model.C.shape[0] if outputs is None else outputs
+    return dict(M=model.M, Bf=model.Bf, Bn=model.Bn, C=model.C[:rows], Dn=model.Dn[:rows],
+                transducer_pole=model.poles, sensor_noise=np.array([a.sensor_noise for a in system.axes]),
+                force_noise=np.array([a.force_noise for a in system.axes]))  # fmt: skip
+
+
+def simulate(system: System, controller: ControllerSpec, force: ArrayLike, *, seed: int | None = None) -> TraceN:
+    """Run the closed loop of N axes from rest on forces (n, N) (N, one column per axis' shaker) at the
+    controller's ``fs``: zero-order held, the loop discretised exactly; ``seed`` fixes the noise."""
+    model = loop_model(system, controller)
+    N = model.Bf.shape[1]
+    array = np.ascontiguousarray(force, dtype=np.float64)
+    names = system.mechanics().names
+    require(array.ndim == 2 and array.shape[1] == N, "force shape", array.shape, f"(samples, {N}): columns {names}")
+    recorded, out = _core.mimo_simulate(**core_args(model, system), force=array, seed=seed_value(seed))
+    return TraceN(force=recorded, displacement=out[:, :N], current=out[:, N:], fs=model.fs, axes=names)
+
+
+@dataclass(frozen=True, eq=False)
+class EstimateN(ArrayRecord):
+    """N x N frequency-domain estimate at the excited lines; every matrix has shape (lines, N, N).
+
+    Attributes
+    ----------
+    freq : ndarray
+        Excited lines, Hz.
+    H : ndarray
+        Dynamic stiffness ``F Y^-1``, complex, N/m: ``H[:, i, j] = dF_i / dY_j`` (F: the recorded forces at
+        the bearing planes; Y: the structure's reported displacements, at the bearing planes for a rotor).
+    receptance : ndarray
+        ``Y F^-1 = H^-1``, m/N.
+    k, c : ndarray
+        Actual stiffness ``Re(H + w^2 Mb - j w W Gb)`` (N/m) and damping ``Im(...) / w`` (N s/m): the
+        structure's known mass and gyroscopic matrices at the bearing planes removed (paper eq. 9; mass
+        loading not removed). ``k[:, i, j]`` is ROSS's ``k_ij`` (force ``-K q - C dq/dt``).
+    k_smooth, c_smooth : ndarray
+        Median filtered across the lines per entry (window ``median_window``, ends repeat the edge).
+    k_std, c_std : ndarray
+        Standard errors (first-order propagation of the period-to-period deviations of every
+        experiment's spectra through ``F Y^-1``; ``periods - 1`` degrees of freedom).
+    force, displacement : ndarray
+        Period-averaged complex amplitudes, ``[:, channel, experiment]``, N and m.
+    periods : int
+        Periods averaged per experiment.
+    axes : tuple of str
+        The axes' names (``A.x, A.y, B.x, B.y`` for a rotor).
+    """
+
+    freq: np.ndarray
+    H: np.ndarray
+    receptance: np.ndarray
+    k: np.ndarray
+    c: np.ndarray
+    k_smooth: np.ndarray
+    c_smooth: np.ndarray
+    k_std: np.ndarray
+    c_std: np.ndarray
+    force: np.ndarray
+    displacement: np.ndarray
+    periods: int
+    axes: tuple[str, ...]
+
+
+def median_lines(x: np.ndarray, window: int) -> np.ndarray:
+    """Running median across the lines (axis 0) per entry; the ends repeat the edge value."""
+    return _core.median_filter(np.ascontiguousarray(x.reshape(x.shape[0], -1)), window).reshape(x.shape)
+
+
+def estimate(
+    force_lines: np.ndarray, displacement_lines: np.ndarray, freq: np.ndarray, mechanics: Mechanics, period: int,
+    median_window: int = 5,
+) -> EstimateN:  # fmt: skip
+    """The N x N estimate from every experiment's per-period line spectra (periods, lines, channel,
+    experiment), complex, unscaled DFT bins; the displacements are the probes' readings (the structure's
+    ``readout`` is applied here). ``H = F Y^-1`` per line with F, Y the period means; its standard errors
+    from the linearised ``dH = (dF - H dY) Y^-1`` of every period."""
+    Fp = force_lines
+    Yp = mechanics.readout @ displacement_lines
+    P = Fp.shape[0]
+    require(P >= 2, "periods", P, ">= 2 (standard errors need at least two)")
+    require(bool(np.all(np.isfinite(Fp)) and np.all(np.isfinite(Yp))), "line spectra", "non-finite", "finite")
+    F, Y = Fp.mean(axis=0), Yp.mean(axis=0)
+    Y_inverse = np.linalg.inv(Y)
+    H = F @ Y_inverse
+    dH = ((Fp - F) - H @ (Yp - Y)) @ Y_inverse
+    scale = 1.0 / (P * (P - 1))
+    var_re, var_im = (dH.real**2).sum(axis=0) * scale, (dH.imag**2).sum(axis=0) * scale
+    actual = H - known_dynamics(mechanics, freq)
+    w = (2 * np.pi * freq)[:, None, None]
+    k, c = actual.real, actual.imag / w
+    amplitude = 2.0 / period
+    return EstimateN(freq=freq, H=H, receptance=np.linalg.inv(H), k=k, c=c, k_smooth=median_lines(k, median_window),
+                     c_smooth=median_lines(c, median_window), k_std=np.sqrt(var_re), c_std=np.sqrt(var_im) / w,
+                     force=amplitude * F, displacement=amplitude * Y, periods=P, axes=mechanics.names)  # fmt: skip
+
+
+def experiment_seeds(seed: int | None, n: int) -> list[int]:
+    """The N experiments' seeds: the run's, then one of its own per further experiment (two axes: the seeds
+    the two-axis experiment has always used)."""
+    s = seed_value(seed)
+    return [s] + [(s ^ (0xA5A5A5A5DEADBEEF * e)) % 2**64 for e in range(1, n)]
+
+
+def settle_for(system: System, fs: float, poles: np.ndarray, period: int) -> int:
+    """Periods from rest for the slowest pole (or transducer pole) to decay below 1e-9."""
+    slowest = float(np.max(np.abs(poles), initial=0.0))
+    for axis in system.axes:
+        if axis.force_coupling_tau is not None:
+            slowest = max(slowest, float(np.exp(-1.0 / (fs * axis.force_coupling_tau))))
+    periods = int(settle_periods_for(np.array(slowest), period))
+    if periods > MAX_AUTOMATIC_SETTLE:
+        raise ValueError(f"settling from rest would take {periods} periods (> {MAX_AUTOMATIC_SETTLE}): slowest pole "
+                         f"|z| = {slowest:.12g}; use start='steady' or give settle_periods")  # fmt: skip
+    return periods
+
+
+def run_experiment(
+    system: System,
+    controller: ControllerSpec,
+    excitation: Multisine,
+    *,
+    periods: int = 10,
+    settle_periods: int | None = None,
+    seed: int | None = None,
+    median_window: int = 5,
+    start: Literal["steady", "rest"] = "steady",
+) -> EstimateN:
+    """The SPHS identification of N axes: N experiments with Hadamard signs on the shakers, then ``H = F Y^-1``.
+
+    Each experiment records ``periods`` periods from the exact periodic steady state (``start="steady"``:
+    the line spectra drawn directly, exact in distribution) or from rest after ``settle_periods``
+    (default: enough for the slowest pole to decay below 1e-9). ``seed`` fixes the noise of all
+    experiments. Raises :class:`UnstableLoopError` for an unstable loop (naming the speed for a rotor).
+    """
+    require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
+    periods = integer("periods", periods, 2)
+    window = integer("median_window", median_window, 1)
+    require(window % 2 == 1, "median_window", median_window, "odd")
+    require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
+    mech = system.mechanics()
+    N = mech.axes
+    spec = controller_matrix(controller, N)
+    require(excitation.fs == spec.fs, "excitation.fs", excitation.fs, f"equal to the controller's fs ({spec.fs} Hz)")
+    what = "the closed loop" + (f" at speed {mech.speed:g} rad/s" if mech.speed else "")
+    poles = require_stable(system, spec, what)
+    model = loop_model(system, spec)
+    if settle_periods is None:
+        settle_periods = 0 if start == "steady" else settle_for(system, spec.fs, poles, excitation.period_samples)
+    settle = integer("settle_periods", settle_periods, 0)
+    signs = hadamard_signs(N)
+    forces = signs[:, None, :] * excitation.samples[None, :, None]  # (experiment, sample, axis)
+    seeds = experiment_seeds(seed, N)
+    harmonics = excitation.harmonics
+    args = core_args(model, system, outputs=N)
+    F_parts, Y_parts = [], []
+    for first in range(0, N, 2):  # the core runs up to two experiments in lock step
+        Fp, Yp = _core.mimo_line_experiments(**args, period_forces=np.ascontiguousarray(forces[first : first + 2]),
+                                             settle_periods=settle, periods=periods, seeds=seeds[first : first + 2],
+                                             steady_start=start == "steady", bins=harmonics)  # fmt: skip
+        F_parts.append(Fp)
+        Y_parts.append(Yp)
+    Fp, Yp = np.concatenate(F_parts, axis=-1), np.concatenate(Y_parts, axis=-1)
+    return estimate(Fp, Yp, harmonics * excitation.f0, mech, excitation.period_samples, window)

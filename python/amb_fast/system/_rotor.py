@@ -1,0 +1,174 @@
+"""The rigid rotor on two radial magnetic bearings: four controlled axes ``A.x, A.y, B.x, B.y``.
+
+Coordinates at the centre of mass ``q = (x, y, tx, ty)``; the displacement at axial position ``z`` (m,
+from the centre of mass) is ``(x + z ty, y - z tx)``. ``m x'' = Qx``, ``m y'' = Qy``,
+``It tx'' + Ip W ty' = Qtx``, ``It ty'' - Ip W tx' = Qty``; a force ``(Fx, Fy)`` at ``z`` gives
+``Qx = Fx``, ``Qy = Fy``, ``Qtx = -z Fy``, ``Qty = z Fx`` (``docs/model.md``, "Rotors").
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, Union
+
+import numpy as np
+
+from .._params import Rig
+from .._validate import real, require
+from ._mechanics import Mechanics
+
+AXES = ("A.x", "A.y", "B.x", "B.y")
+
+
+def plane_map(z: float) -> np.ndarray:
+    """(2, 4): ``(x, y, tx, ty)`` to the displacement ``(x + z ty, y - z tx)`` at axial position ``z``."""
+    return np.array([[1.0, 0.0, 0.0, z], [0.0, 1.0, -z, 0.0]])
+
+
+def _pair(name: str, value: Any, unit: str) -> tuple[float, float]:
+    ok = isinstance(value, Sequence) and not isinstance(value, str) and len(value) == 2
+    require(ok, name, value, f"a pair (A, B) of axial positions, {unit}")
+    a, b = (real(f"{name}[{j}]", v, unit) for j, v in enumerate(value))
+    require(a != b, name, value, "two different planes (one plane cannot hold the rotor's tilt)")
+    return a, b
+
+
+@dataclass(frozen=True)
+class RigidRotor:
+    """A rigid rotor: mass, inertias, the planes of its bearings and probes, its spin.
+
+    Parameters
+    ----------
+    mass : float
+        kg.
+    transverse_inertia, polar_inertia : float
+        ``It``, ``Ip`` about the centre of mass, kg m^2 (``0 <= Ip <= 2 It`` for a rigid body).
+    bearings, sensors : pair of float
+        Axial positions of bearings A and B and of their probes, m from the centre of mass.
+    speed : float
+        Spin ``W``, rad/s, positive from x towards y.
+    process : sequence of (z, kxy, kyx, cxy, cyx)
+        Cross-coupled processes (a seal, an impeller, a fluid film) at axial position ``z`` (m): at that
+        plane ``F_x = -kxy y - cxy y'``, ``F_y = -kyx x - cyx x'`` (N/m, N s/m; ROSS's convention, as
+        :class:`~amb_fast.TwoAxisRig`).
+    """
+
+    mass: float
+    transverse_inertia: float
+    polar_inertia: float
+    bearings: tuple[float, float] = (-0.2, 0.2)
+    sensors: tuple[float, float] = (-0.23, 0.23)
+    speed: float = 0.0
+    process: tuple[tuple[float, float, float, float, float], ...] = ()
+
+    def __post_init__(self) -> None:
+        real("mass", self.mass, "kg", positive=True)
+        It = real("transverse_inertia", self.transverse_inertia, "kg m^2", positive=True)
+        Ip = real("polar_inertia", self.polar_inertia, "kg m^2")
+        require(0 <= Ip <= 2 * It, "polar_inertia", Ip, f"within [0, 2 transverse_inertia] = [0, {2 * It}] kg m^2 "
+                "(a rigid body's polar inertia is at most twice its transverse one)")  # fmt: skip
+        object.__setattr__(self, "bearings", _pair("bearings", self.bearings, "m"))
+        object.__setattr__(self, "sensors", _pair("sensors", self.sensors, "m"))
+        real("speed", self.speed, "rad/s")
+        entries = []
+        for j, entry in enumerate(self.process):
+            ok = isinstance(entry, Sequence) and len(entry) == 5
+            require(ok, f"process[{j}]", entry, "(z m, kxy N/m, kyx N/m, cxy N s/m, cyx N s/m)")
+            entries.append(tuple(real(f"process[{j}][{k}]", v, "SI") for k, v in enumerate(entry)))
+        object.__setattr__(self, "process", tuple(entries))
+
+    def mechanics(self) -> Mechanics:
+        """The rotor's matrices over ``(x, y, tx, ty)`` and its four axes' geometry (A.x, A.y, B.x, B.y)."""
+        m, It, Ip = self.mass, self.transverse_inertia, self.polar_inertia
+        G = np.zeros((4, 4))
+        G[2, 3], G[3, 2] = Ip, -Ip  # It tx'' + Ip W ty' ; It ty'' - Ip W tx'
+        K, C = np.zeros((4, 4)), np.zeros((4, 4))
+        for z, kxy, kyx, cxy, cyx in self.process:
+            P = plane_map(z)
+            K += P.T @ np.array([[0.0, kxy], [kyx, 0.0]]) @ P
+            C += P.T @ np.array([[0.0, cxy], [cyx, 0.0]]) @ P
+        actuators = np.vstack([plane_map(z) for z in self.bearings])
+        probes = np.vstack([plane_map(z) for z in self.sensors])
+        readout = actuators @ np.linalg.inv(probes)  # the probes' readings moved to the bearing planes
+        return Mechanics(
+            np.diag([m, m, It, It]),
+            G,
+            K,
+            C,
+            actuators,
+            probes,
+            readout,
+            float(self.speed),
+            AXES,
+            ("x", "y", "tx", "ty"),
+        )
+
+
+AxesSpec = Union[Rig, Sequence[Rig]]
+
+
+@dataclass(frozen=True)
+class RotorRig:
+    """A rigid rotor on two radial magnetic bearings, each axis with the one-axis rig's chain.
+
+    Parameters
+    ----------
+    rotor : RigidRotor
+    axes : Rig or sequence of 4 Rig
+        Each axis' actuator (kyy, kiy, amplifier and eddy-current lags, dead time), probe (lag, noise) and
+        shaker force transducer (AC coupling, noise, mass loading at the bearing plane), in the order
+        ``A.x, A.y, B.x, B.y``; one Rig for all four. A Rig's ``mass`` is not used: the rotor has the
+        mass. Only the linear force law, without clearance or current limit.
+    """
+
+    rotor: RigidRotor
+    axes: Any = field(default_factory=Rig)
+
+    def __post_init__(self) -> None:
+        require(isinstance(self.rotor, RigidRotor), "rotor", type(self.rotor).__name__, "an amb_fast.RigidRotor")
+        axes = (self.axes,) * 4 if isinstance(self.axes, Rig) else self.axes
+        ok = isinstance(axes, Sequence) and len(axes) == 4
+        require(ok, "axes", self.axes, "a Rig, or 4 of them (A.x, A.y, B.x, B.y)")
+        for name, axis in zip(AXES, axes):
+            require(isinstance(axis, Rig), f"axes[{name}]", type(axis).__name__, "an amb_fast.Rig")
+            require(axis.force_law == "linear", f"axes[{name}].force_law", axis.force_law,
+                    "'linear' (the non-linear law is not modelled on rotors yet)")  # fmt: skip
+            require(axis.clearance is None, f"axes[{name}].clearance", axis.clearance,
+                    "None (touchdown is not modelled on rotors yet)")  # fmt: skip
+            require(axis.current_limit is None, f"axes[{name}].current_limit", axis.current_limit,
+                    "None (saturation is not modelled on rotors yet)")  # fmt: skip
+        object.__setattr__(self, "axes", tuple(axes))
+
+    @classmethod
+    def example(cls, speed: float = 0.0) -> RotorRig:
+        """A 10 kg rotor (a steel shaft 0.5 m long, 50 mm radius) on two of the paper's magnet pairs.
+
+        Bearings at +-0.2 m, probes 30 mm outboard (+-0.23 m), every axis :meth:`Rig.paper`'s chain;
+        stable under :meth:`PID.paper` on every axis (rigid modes near 19 Hz, parallel, and 24 Hz,
+        conical, at standstill). ``It = m (3 r^2 + L^2) / 12``, ``Ip = m r^2 / 2``.
+        """
+        m, r, length = 10.0, 0.05, 0.5
+        rotor = RigidRotor(m, m * (3 * r**2 + length**2) / 12, m * r**2 / 2, (-0.2, 0.2), (-0.23, 0.23), speed)
+        return cls(rotor, Rig.paper())
+
+    def mechanics(self) -> Mechanics:
+        """The rotor's :class:`Mechanics`."""
+        return self.rotor.mechanics()
+
+    @property
+    def mass(self) -> float:
+        """The rotor's mass, kg."""
+        return float(self.rotor.mass)
+
+    def at_speed(self, speed: float) -> RotorRig:
+        """This rig with the rotor spinning at ``speed`` rad/s."""
+        from dataclasses import replace
+
+        return replace(self, rotor=replace(self.rotor, speed=speed))
+
+
+def rpm(speed: float) -> float:
+    """rad/s to rev/min."""
+    return speed * 60.0 / (2 * math.pi)
