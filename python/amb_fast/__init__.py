@@ -50,6 +50,7 @@ from .controllers import (
     series,
 )
 from .io import Recording, load_estimate, load_recording, save_recording
+from .system import Campbell, EstimateN, RigidRotor, RotorRig, campbell
 from .two_axis import Estimate2, TwoAxisRig, plot_coefficients2
 
 if TYPE_CHECKING:
@@ -87,6 +88,11 @@ except PackageNotFoundError:  # pragma: no cover
 
 __all__ = [
     "CITATION",
+    "Campbell",
+    "EstimateN",
+    "RigidRotor",
+    "RotorRig",
+    "campbell",
     "PID",
     "Controller",
     "Design",

@@ -8,7 +8,12 @@ effective coefficients are N x N; the rotor's experiments and its Campbell diagr
 
 from __future__ import annotations
 
+import sys
+
+from .._dispatch import register
+from ._campbell import Campbell, campbell
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
+from ._experiment import EstimateN, TraceN, hadamard_signs, run_experiment, simulate
 from ._mechanics import Mechanics
 from ._model import (
     LoopModel,
@@ -26,6 +31,13 @@ from ._model import (
 from ._rotor import RigidRotor, RotorRig
 
 __all__ = [
+    "Campbell",
+    "EstimateN",
+    "TraceN",
+    "campbell",
+    "hadamard_signs",
+    "run_experiment",
+    "simulate",
     "ControllerMatrix",
     "ControllerSpec",
     "LoopModel",
@@ -44,3 +56,6 @@ __all__ = [
     "sensitivity",
     "stability_margin",
 ]
+
+# af.predict(rotor_rig, ...) and its siblings run the N-axis functions of this namespace.
+register(RotorRig, sys.modules[__name__])

@@ -8,14 +8,13 @@ from the centre of mass) is ``(x + z ty, y - z tx)``. ``m x'' = Qx``, ``m y'' = 
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Union
 
 import numpy as np
 
-from .._params import Rig
+from .._params import PID, Rig
 from .._validate import real, require
 from ._mechanics import Mechanics
 
@@ -146,12 +145,19 @@ class RotorRig:
         """A 10 kg rotor (a steel shaft 0.5 m long, 50 mm radius) on two of the paper's magnet pairs.
 
         Bearings at +-0.2 m, probes 30 mm outboard (+-0.23 m), every axis :meth:`Rig.paper`'s chain;
-        stable under :meth:`PID.paper` on every axis (rigid modes near 19 Hz, parallel, and 24 Hz,
+        stable under :meth:`example_controller` on every axis (rigid modes near 20 Hz, parallel, and 29 Hz,
         conical, at standstill). ``It = m (3 r^2 + L^2) / 12``, ``Ip = m r^2 / 2``.
         """
         m, r, length = 10.0, 0.05, 0.5
         rotor = RigidRotor(m, m * (3 * r**2 + length**2) / 12, m * r**2 / 2, (-0.2, 0.2), (-0.23, 0.23), speed)
         return cls(rotor, Rig.paper())
+
+    @staticmethod
+    def example_controller() -> Any:
+        """A PID for :meth:`example` on every axis: ``kp = 3000 A/m``, ``ki = 5000 A/(m s)``, ``kd = 10 A s/m``
+        filtered at 1 kHz, 4 kHz, no whole-sample delay (:meth:`PID.paper`'s form, stiffer and more damped
+        for 5 kg a bearing: peak sensitivity 2.6, zone A, damping ratios 0.32 and 0.47 at standstill)."""
+        return PID(kp=3000.0, ki=5000.0, kd=10.0, derivative_cutoff=1000.0, fs=4000.0, delay=0)
 
     def mechanics(self) -> Mechanics:
         """The rotor's :class:`Mechanics`."""
@@ -164,11 +170,4 @@ class RotorRig:
 
     def at_speed(self, speed: float) -> RotorRig:
         """This rig with the rotor spinning at ``speed`` rad/s."""
-        from dataclasses import replace
-
         return replace(self, rotor=replace(self.rotor, speed=speed))
-
-
-def rpm(speed: float) -> float:
-    """rad/s to rev/min."""
-    return speed * 60.0 / (2 * math.pi)

@@ -1,0 +1,166 @@
+"""The rigid rotor on two bearings (N = 4) against independent answers: the one-axis model where the rotor
+splits into two independent masses, the equations of motion written out here, exact experiments."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import amb_fast as af
+from amb_fast.system import _model
+
+PID = af.RotorRig.example_controller()
+SPHS = af.schroeder_multisine(f0=20.0, f_max=400.0)  # 200-sample periods: quick
+CHAIN = af.Rig(amp_bandwidth=3000.0, eddy_bandwidth=2000.0, sensor_bandwidth=10_000.0, mass_loading=0.06,
+               force_coupling_tau=1.0, dead_time=0.3e-3)  # fmt: skip
+
+
+def split_rotor(speed: float = 0.0, Ip: float = 0.0) -> af.RigidRotor:
+    """Bearings at +-a with It = m a^2: in bearing coordinates the rotor is two masses m/2, uncoupled."""
+    m, a = 10.0, 0.2
+    return af.RigidRotor(m, m * a**2, Ip, bearings=(-a, a), sensors=(-a, a), speed=speed)
+
+
+def test_a_rotor_that_splits_into_two_masses_is_four_one_axis_rigs() -> None:
+    """Sensors at the bearings, It = m a^2, no spin: each axis is the one-axis rig of mass m/2 (the one-axis
+    model, a separate code path through the C++ core), and nothing couples the axes."""
+    rig = af.RotorRig(split_rotor(), CHAIN)
+    freq = SPHS.harmonics * SPHS.f0
+    R = af.predict(rig, PID, freq)
+    one = af.predict(replace(CHAIN, mass=5.0), PID, freq)
+    for j in range(4):
+        np.testing.assert_allclose(R[:, j, j], one, rtol=1e-9)
+    off = R[:, ~np.eye(4, dtype=bool)]
+    assert np.max(np.abs(off)) < 1e-12 * np.max(np.abs(one))
+    # Its actual coefficients remove the rotor's mass at the bearings (m/2 each): the one-axis estimate's.
+    est = af.run_experiment(rig, PID, SPHS, periods=3)
+    one_est = af.run_experiment(replace(CHAIN, mass=5.0), PID, SPHS, periods=3)
+    for j in range(4):
+        np.testing.assert_allclose(est.k[:, j, j], one_est.k, rtol=1e-8)
+        np.testing.assert_allclose(est.c[:, j, j], one_est.c, rtol=1e-8)
+
+
+def test_plant_is_the_equations_of_motion() -> None:
+    """The continuous plant's rotor rows equal M^-1 of the equations written out here (no chain stages)."""
+    rotor = af.RigidRotor(8.0, 0.3, 0.05, bearings=(-0.15, 0.25), sensors=(-0.2, 0.3), speed=700.0,
+                          process=[(0.05, 2e3, -2e3, 10.0, -10.0)])  # fmt: skip
+    kyy, kiy = -4e4, 40.0
+    rig = af.RotorRig(rotor, af.Rig(kyy=kyy, kiy=kiy))
+    A, B, layout = _model.plant(rig)
+    pos, vel = list(layout.position), list(layout.velocity)
+    m, It, Ip, W = 8.0, 0.3, 0.05, 700.0
+    M = np.diag([m, m, It, It])
+
+    # Forces (Fx, Fy) at z act as Qx = Fx, Qy = Fy, Qtx = -z Fy, Qty = z Fx; d(z) = (x + z ty, y - z tx).
+    def Q(z: float) -> np.ndarray:  # (4, 2): generalized forces of (Fx, Fy) at z
+        return np.array([[1, 0], [0, 1], [0, -z], [z, 0]], dtype=float)
+
+    Kq = np.zeros((4, 4))
+    for z in (-0.15, 0.25):
+        Kq += Q(z) @ (kyy * np.eye(2)) @ Q(z).T  # -kyy d at the bearing, d = Q(z)^T q
+    Kq += Q(0.05) @ np.array([[0, 2e3], [-2e3, 0]]) @ Q(0.05).T
+    Cq = Q(0.05) @ np.array([[0, 10.0], [-10.0, 0]]) @ Q(0.05).T
+    Cq[2, 3] += Ip * W  # It tx'' + Ip W ty'
+    Cq[3, 2] -= Ip * W  # It ty'' - Ip W tx'
+    np.testing.assert_allclose(A[np.ix_(vel, pos)], -np.linalg.solve(M, Kq), rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(A[np.ix_(vel, vel)], -np.linalg.solve(M, Cq), rtol=1e-12, atol=1e-12)
+    forces = np.hstack([Q(-0.15), Q(0.25)])  # shaker columns A.x, A.y, B.x, B.y
+    np.testing.assert_allclose(B[vel, :4], np.linalg.solve(M, forces), rtol=1e-12)
+    np.testing.assert_allclose(B[vel, 4:], -kiy * np.linalg.solve(M, forces), rtol=1e-12)
+
+
+@pytest.mark.parametrize("start", ["steady", "rest"])
+def test_noise_free_experiment_equals_predict_with_speed_lags_and_non_collocated_probes(start: str) -> None:
+    rotor = replace(af.RotorRig.example().rotor, speed=900.0, process=((0.1, 3e3, -3e3, 0.0, 0.0),))
+    axes = [CHAIN, replace(CHAIN, amp_bandwidth=2500.0), replace(CHAIN, dead_time=0.1e-3), CHAIN]
+    rig = af.RotorRig(rotor, axes)
+    est = af.run_experiment(rig, PID, SPHS, periods=3, start=start)
+    R = af.predict(rig, PID, est.freq)
+    np.testing.assert_allclose(est.receptance, R, rtol=0, atol=1e-9 * np.max(np.abs(R)))
+    np.testing.assert_allclose(est.H, np.linalg.inv(R), rtol=0, atol=1e-9 * np.max(np.abs(est.H)))
+
+
+def test_standstill_symmetric_rotor_decouples_x_and_y() -> None:
+    rig = af.RotorRig.example()
+    R = af.predict(rig, PID, SPHS.harmonics * SPHS.f0)
+    x, y = [0, 2], [1, 3]
+    assert np.max(np.abs(R[:, x][:, :, y])) < 1e-13 * np.max(np.abs(R))
+    assert np.max(np.abs(R[:, y][:, :, x])) < 1e-13 * np.max(np.abs(R))
+    spinning = af.predict(rig.at_speed(2000.0), PID, SPHS.harmonics * SPHS.f0)
+    assert np.max(np.abs(spinning[:, x][:, :, y])) > 1e-3 * np.max(np.abs(spinning))  # gyroscopics couple them
+
+
+def test_actual_coefficients_remove_the_known_rotor() -> None:
+    """k + j w c = H + w^2 Mb - j w W Gb: with the exact H of predict, Mb and Gb written out here."""
+    rig = af.RotorRig(af.RotorRig.example(speed=1500.0).rotor, CHAIN)
+    est = af.run_experiment(rig, PID, SPHS, periods=3)
+    rotor = rig.rotor
+    zA, zB = rotor.bearings
+    # Bearing-plane displacements d = T q; T rows: A.x = x + zA ty, A.y = y - zA tx, ...
+    T = np.array([[1, 0, 0, zA], [0, 1, -zA, 0], [1, 0, 0, zB], [0, 1, -zB, 0]], dtype=float)
+    Ti = np.linalg.inv(T)
+    Mb = Ti.T @ np.diag([rotor.mass, rotor.mass, rotor.transverse_inertia, rotor.transverse_inertia]) @ Ti
+    G = np.zeros((4, 4))
+    G[2, 3], G[3, 2] = rotor.polar_inertia, -rotor.polar_inertia
+    Gb = Ti.T @ G @ Ti
+    w = 2 * np.pi * est.freq[:, None, None]
+    H = np.linalg.inv(af.predict(rig, PID, est.freq))
+    expected = H + w**2 * Mb - 1j * w * rotor.speed * Gb
+    np.testing.assert_allclose(est.k, expected.real, rtol=0, atol=1e-8 * np.max(np.abs(expected)))
+    np.testing.assert_allclose(est.c * w, expected.imag, rtol=0, atol=1e-8 * np.max(np.abs(expected)))
+
+
+def test_campbell_poles_whirl_and_onset() -> None:
+    rig = af.RotorRig.example()
+    speeds = np.array([0.0, 1000.0, 3000.0])
+    c = af.campbell(rig, PID, speeds)
+    for i, W in enumerate(speeds):
+        M = _model.loop_model(rig.at_speed(W), PID).M
+        expected = np.linalg.eigvals(M)
+        assert np.max(np.min(np.abs(c.z[i][:, None] - expected[None, :]), axis=1)) < 1e-9
+    np.testing.assert_allclose(c.frequency, np.abs(np.log(c.z).imag) * 4000.0 / (2 * np.pi), rtol=1e-12)
+    assert c.onset_speed is None
+    # The conical mode splits with speed: backward whirl falls, forward whirl rises (gyroscopic stiffening).
+    conical = (c.whirl != 0) & (c.damping < 0.9) & (c.frequency > 25.0) & (c.frequency < 80.0)
+    forward = [c.frequency[i][conical[i] & (c.whirl[i] > 0)] for i in range(3)]
+    backward = [c.frequency[i][conical[i] & (c.whirl[i] < 0)] for i in range(3)]
+    assert forward[0].min() == pytest.approx(backward[0].min(), rel=1e-9)  # standstill: one and the other
+    assert forward[2].min() > forward[1].min() > forward[0].min()
+    assert backward[2].size == 0 or backward[2].max() < backward[0].max()
+
+
+def test_campbell_reports_instability_and_runs_name_the_speed() -> None:
+    """A destabilising cross-coupled process (kxy = -kyx beyond what the bearings' damping holds, about
+    2 c w = 2 (47.19 * 10) (2 pi 20) = 120 kN/m at the centre): unstable at every speed; the diagram says
+    from which speed given, and an experiment refuses it naming the speed."""
+    rotor = replace(af.RotorRig.example().rotor, process=((0.0, 3e5, -3e5, 0.0, 0.0),))
+    rig = af.RotorRig(rotor, af.Rig.paper())
+    c = af.campbell(rig, PID, [100.0, 200.0])
+    assert c.onset_speed == 100.0 and np.all(np.abs(c.z).max(axis=1) > 1.0)
+    with pytest.raises(af.UnstableLoopError, match="at speed 200 rad/s"):
+        af.run_experiment(rig.at_speed(200.0), PID, SPHS)
+    stable = af.campbell(af.RotorRig.example(), PID, [100.0, 200.0])
+    assert stable.onset_speed is None
+
+
+def test_bad_rotors_are_refused_naming_the_value() -> None:
+    with pytest.raises(ValueError, match="bearings"):
+        af.RigidRotor(10.0, 0.2, 0.01, bearings=(0.1, 0.1))
+    with pytest.raises(ValueError, match="sensors"):
+        af.RigidRotor(10.0, 0.2, 0.01, sensors=(0.0, 0.0))
+    with pytest.raises(ValueError, match="polar_inertia"):
+        af.RigidRotor(10.0, 0.2, 0.5)
+    with pytest.raises(ValueError, match="transverse_inertia"):
+        af.RigidRotor(10.0, 0.0, 0.0)
+    with pytest.raises(ValueError, match="mass"):
+        af.RigidRotor(-1.0, 0.2, 0.0)
+    with pytest.raises(ValueError, match="axes"):
+        af.RotorRig(split_rotor(), [af.Rig()] * 3)
+    with pytest.raises(ValueError, match="controller"):
+        af.predict(af.RotorRig(split_rotor()), [PID, PID], [10.0])
+    with pytest.raises(ValueError, match="controller"):
+        af.predict(af.RotorRig(split_rotor()), [[PID] * 4] * 3, [10.0])
+    with pytest.raises(ValueError, match="speeds"):
+        af.campbell(af.RotorRig.example(), PID, [0.0, np.nan])
