@@ -106,28 +106,26 @@ def _whirl(values: np.ndarray, vectors: np.ndarray, F: np.ndarray, D: np.ndarray
     A repeated pole (x and y alike: any rotor at standstill, the parallel mode at any speed) has no
     mode shape of its own, only a plane of them; within it the shapes of pure whirl are the eigenvectors
     of the forward form relative to the amplitude (one forward, one backward), and those are used."""
-    whirl = np.zeros(values.size, dtype=int)
-    done = np.zeros(values.size, dtype=bool)
-    for i in range(values.size):
-        if done[i]:
-            continue
-        group = np.flatnonzero(~done & (np.abs(values - values[i]) <= 1e-8 * max(1.0, abs(values[i]))))
-        done[group] = True
+    FV, DV = F @ vectors, D @ vectors
+    measure = np.einsum("ij,ij->j", vectors.conj(), FV).real
+    amplitude = np.einsum("ij,ij->j", vectors.conj(), DV).real
+    total = np.einsum("ij,ij->j", vectors.conj(), vectors).real
+    # For Im s < 0 (the conjugate pole) the same orbit reads the other way round.
+    turning = np.sign(np.angle(values))
+    whirl = np.sign(np.round(measure / np.maximum(amplitude, 1e-300), 9)) * turning
+    order = np.argsort(values.real + 1e3 * values.imag, kind="stable")
+    close = np.abs(np.diff(values[order])) <= 1e-8 * np.maximum(1.0, np.abs(values[order][1:]))
+    for k in np.flatnonzero(close):  # repeated poles come in pairs (x and y)
+        group = order[k : k + 2]
         V = vectors[:, group]
-        amplitude = (V.conj().T @ D @ V).real.trace()
-        if amplitude <= 1e-9 * np.sum(np.abs(V) ** 2) or abs(np.angle(values[i])) <= 1e-9:
-            continue  # no rotor motion at the bearings, or no oscillation
-        if group.size == 1:
-            measure = np.array([(V[:, 0].conj() @ F @ V[:, 0]).real])
-        else:
-            Dg, Fg = V.conj().T @ D @ V, V.conj().T @ F @ V
-            Dg = (Dg + Dg.conj().T) / 2 + 1e-300 * np.eye(group.size)
-            measure = np.linalg.eigvalsh(np.linalg.solve(np.linalg.cholesky(Dg), np.linalg.solve(
-                np.linalg.cholesky(Dg), (Fg + Fg.conj().T) / 2).conj().T))  # fmt: skip
-        # For Im s < 0 (the conjugate pole) the same orbit reads the other way round.
-        signs = np.sign(np.round(measure / amplitude * group.size, 9)) * np.sign(np.angle(values[i]))
-        whirl[group] = np.sort(signs)[::-1].astype(int)
-    return whirl
+        Dg, Fg = V.conj().T @ D @ V, V.conj().T @ F @ V
+        root = np.linalg.cholesky((Dg + Dg.conj().T) / 2 + 1e-300 * np.eye(2))
+        within = np.linalg.solve(root, np.linalg.solve(root, (Fg + Fg.conj().T) / 2).conj().T)
+        pure = np.sign(np.round(np.linalg.eigvalsh((within + within.conj().T) / 2), 9)) * turning[group[0]]
+        whirl[group] = np.sort(pure)[::-1]
+    moving = amplitude > 1e-9 * total  # rotor motion at the bearings
+    oscillating = np.abs(np.angle(values)) > 1e-9
+    return np.where(moving & oscillating, whirl, 0).astype(int)
 
 
 def campbell(rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike) -> Campbell:

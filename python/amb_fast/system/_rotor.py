@@ -8,6 +8,7 @@ from the centre of mass) is ``(x + z ty, y - z tx)``. ``m x'' = Qx``, ``m y'' = 
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, Union
@@ -80,29 +81,27 @@ class RigidRotor:
 
     def mechanics(self) -> Mechanics:
         """The rotor's matrices over ``(x, y, tx, ty)`` and its four axes' geometry (A.x, A.y, B.x, B.y)."""
-        m, It, Ip = self.mass, self.transverse_inertia, self.polar_inertia
-        G = np.zeros((4, 4))
-        G[2, 3], G[3, 2] = Ip, -Ip  # It tx'' + Ip W ty' ; It ty'' - Ip W tx'
-        K, C = np.zeros((4, 4)), np.zeros((4, 4))
-        for z, kxy, kyx, cxy, cyx in self.process:
-            P = plane_map(z)
-            K += P.T @ np.array([[0.0, kxy], [kyx, 0.0]]) @ P
-            C += P.T @ np.array([[0.0, cxy], [cyx, 0.0]]) @ P
-        actuators = np.vstack([plane_map(z) for z in self.bearings])
-        probes = np.vstack([plane_map(z) for z in self.sensors])
-        readout = actuators @ np.linalg.inv(probes)  # the probes' readings moved to the bearing planes
-        return Mechanics(
-            np.diag([m, m, It, It]),
-            G,
-            K,
-            C,
-            actuators,
-            probes,
-            readout,
-            float(self.speed),
-            AXES,
-            ("x", "y", "tx", "ty"),
-        )
+        return _rotor_mechanics(self)
+
+
+@functools.lru_cache(maxsize=64)
+def _rotor_mechanics(rotor: RigidRotor) -> Mechanics:
+    """:meth:`RigidRotor.mechanics`, once per distinct rotor (every model of a loop asks for it); read-only."""
+    m, It, Ip = rotor.mass, rotor.transverse_inertia, rotor.polar_inertia
+    G = np.zeros((4, 4))
+    G[2, 3], G[3, 2] = Ip, -Ip  # It tx'' + Ip W ty' ; It ty'' - Ip W tx'
+    K, C = np.zeros((4, 4)), np.zeros((4, 4))
+    for z, kxy, kyx, cxy, cyx in rotor.process:
+        P = plane_map(z)
+        K += P.T @ np.array([[0.0, kxy], [kyx, 0.0]]) @ P
+        C += P.T @ np.array([[0.0, cxy], [cyx, 0.0]]) @ P
+    actuators = np.vstack([plane_map(z) for z in rotor.bearings])
+    probes = np.vstack([plane_map(z) for z in rotor.sensors])
+    readout = actuators @ np.linalg.inv(probes)  # the probes' readings moved to the bearing planes
+    matrices = (np.diag([m, m, It, It]), G, K, C, actuators, probes, readout)
+    for matrix in matrices:
+        matrix.flags.writeable = False
+    return Mechanics(*matrices, float(rotor.speed), AXES, ("x", "y", "tx", "ty"))
 
 
 AxesSpec = Union[Rig, Sequence[Rig]]
