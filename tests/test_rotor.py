@@ -164,3 +164,25 @@ def test_bad_rotors_are_refused_naming_the_value() -> None:
         af.predict(af.RotorRig(split_rotor()), [[PID] * 4] * 3, [10.0])
     with pytest.raises(ValueError, match="speeds"):
         af.campbell(af.RotorRig.example(), PID, [0.0, np.nan])
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4])
+def test_nxn_estimator_is_the_formula(n: int) -> None:
+    """The core's N x N estimate against the formula in numpy: H = F Y^-1 of the period means, variances of
+    the linearised dH = (dF - H dY) Y^-1 summed over periods / (P (P - 1)); for N = 2 also the 2x2 core's."""
+    rng = np.random.default_rng(n)
+    shape = (6, 5, n, n)
+    Fp = rng.standard_normal(shape) + 1j * rng.standard_normal(shape) + 3 * np.eye(n)
+    Yp = rng.standard_normal(shape) + 1j * rng.standard_normal(shape) + 3 * np.eye(n)
+    H, R, F, Y, var_re, var_im = af._core.estimate_nxn(Fp, Yp)
+    Fm, Ym = Fp.mean(axis=0), Yp.mean(axis=0)
+    Hm = Fm @ np.linalg.inv(Ym)
+    dH = ((Fp - Fm) - Hm @ (Yp - Ym)) @ np.linalg.inv(Ym)
+    np.testing.assert_allclose(H, Hm, rtol=1e-12)
+    np.testing.assert_allclose(R, np.linalg.inv(Hm), rtol=1e-12)
+    np.testing.assert_allclose(F, Fm, rtol=1e-14)
+    np.testing.assert_allclose(var_re, (dH.real**2).sum(axis=0) / 30, rtol=1e-12)
+    np.testing.assert_allclose(var_im, (dH.imag**2).sum(axis=0) / 30, rtol=1e-12)
+    if n == 2:
+        for got, expected in zip(af._core.estimate_2x2(Fp, Yp), (H, R, F, Y, var_re, var_im)):
+            np.testing.assert_allclose(got, expected, rtol=1e-12)

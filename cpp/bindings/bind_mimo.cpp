@@ -26,15 +26,17 @@ MimoModel model_of(const Matrix& M, const Matrix& Bf, const Matrix& Bn, const Ma
 }
 
 // The experiments' period forces, (len(seeds), period, p), checked with the seeds and the periods
-// asked for; returns one pointer per experiment into the array and the period length.
+// asked for; returns one pointer per experiment into the array and the period length. Runs sample by sample
+// take one or two experiments in lock step (the loop's lanes); drawn line spectra any number (any_count).
 std::vector<const double*> experiment_forces(const InputArray& period_forces, Eigen::Index p,
                                              const std::vector<std::uint64_t>& seeds, Eigen::Index periods,
-                                             Eigen::Index& L) {
+                                             Eigen::Index& L, bool any_count = false) {
     if (period_forces.ndim() != 3 || period_forces.shape(2) != p ||
         static_cast<std::size_t>(period_forces.shape(0)) != seeds.size())
         throw std::invalid_argument("period_forces must have shape (len(seeds), period, " + std::to_string(p) + ")");
-    if (seeds.empty() || seeds.size() > 2)
-        throw std::invalid_argument("seeds must hold 1 or 2 seeds (experiments in lock step)");
+    if (seeds.empty() || (!any_count && seeds.size() > 2))
+        throw std::invalid_argument(any_count ? "seeds must hold at least one seed"
+                                              : "seeds must hold 1 or 2 seeds (experiments in lock step)");
     if (periods < 2) throw std::invalid_argument("periods must be >= 2, got " + std::to_string(periods));
     L = static_cast<Eigen::Index>(period_forces.shape(1));
     std::vector<const double*> forces;
@@ -111,7 +113,8 @@ void bind_mimo(py::module_& m) {
             const MimoModel model = model_of(M, Bf, Bn, C, Dn, transducer_pole, sensor_noise, force_noise);
             const auto p = model.forces(), q = model.probes();
             Eigen::Index L = 0;
-            const std::vector<const double*> forces = experiment_forces(period_forces, p, seeds, periods, L);
+            const std::vector<const double*> forces =
+                experiment_forces(period_forces, p, seeds, periods, L, steady_start);
             const auto K = static_cast<Eigen::Index>(forces.size());
             const auto B = static_cast<Eigen::Index>(bins.size());
             py::array_t<std::complex<double>> force_lines({periods, B, p, K}), displacement_lines({periods, B, q, K});
@@ -128,8 +131,9 @@ void bind_mimo(py::module_& m) {
         py::arg("periods"), py::arg("seeds"), py::arg("steady_start"), py::arg("bins"),
         "mimo_experiments reduced to the unscaled DFT of every recorded period at the given bins: returns the force "
         "and displacement line spectra, complex, (periods, bins, channels, experiments). With steady_start the "
-        "spectra are drawn directly, exact in distribution (mimo_lines.hpp), and the bins must lie strictly "
-        "between 0 and period / 2. Releases the GIL.");
+        "spectra are drawn directly, exact in distribution (mimo_lines.hpp), for any number of experiments (the "
+        "per-line solves made once for all), and the bins must lie strictly between 0 and period / 2; from rest, "
+        "1 or 2 experiments. Releases the GIL.");
     m.def(
         "estimate_2x2",
         [](const py::array_t<std::complex<double>, py::array::c_style | py::array::forcecast>& force_lines,
@@ -159,6 +163,37 @@ void bind_mimo(py::module_& m) {
         py::arg("force_lines"), py::arg("displacement_lines"),
         "The 2x2 estimate from per-period line spectra (periods, lines, channel, experiment): returns H = F Y^-1, its "
         "inverse, the period means F and Y (lines, 2, 2), and the variances of Re H and Im H (lines, 2, 2).");
+    m.def(
+        "estimate_nxn",
+        [](const py::array_t<std::complex<double>, py::array::c_style | py::array::forcecast>& force_lines,
+           const py::array_t<std::complex<double>, py::array::c_style | py::array::forcecast>& displacement_lines) {
+            if (force_lines.ndim() != 4 || force_lines.shape(2) != force_lines.shape(3))
+                throw std::invalid_argument("force_lines must have shape (periods, lines, N, N)");
+            for (py::ssize_t d = 0; d < 4; ++d)
+                if (displacement_lines.ndim() != 4 || displacement_lines.shape(d) != force_lines.shape(d))
+                    throw std::invalid_argument("displacement_lines must have the shape of force_lines");
+            const auto P = static_cast<Eigen::Index>(force_lines.shape(0));
+            const auto B = static_cast<Eigen::Index>(force_lines.shape(1));
+            const auto N = static_cast<Eigen::Index>(force_lines.shape(2));
+            const std::complex<double>*fl = force_lines.data(), *dl = displacement_lines.data();
+            const Estimate2x2 est = interruptible([&] { return estimate_nxn(fl, dl, P, B, N); });
+            auto complex_array = [&](const std::vector<std::complex<double>>& x) {
+                py::array_t<std::complex<double>> a({B, N, N});
+                std::copy(x.begin(), x.end(), a.mutable_data());
+                return a;
+            };
+            auto real_array = [&](const std::vector<double>& x) {
+                py::array_t<double> a({B, N, N});
+                std::copy(x.begin(), x.end(), a.mutable_data());
+                return a;
+            };
+            return py::make_tuple(complex_array(est.H), complex_array(est.receptance), complex_array(est.force),
+                                  complex_array(est.displacement), real_array(est.var_re), real_array(est.var_im));
+        },
+        py::arg("force_lines"), py::arg("displacement_lines"),
+        "estimate_2x2 for N axes: from the per-period line spectra (periods, lines, N channels, N experiments) "
+        "returns H = F Y^-1, its inverse, the period means F and Y (lines, N, N), and the variances of Re H and "
+        "Im H (lines, N, N).");
     m.def(
         "mimo_line_sweep",
         [](const std::vector<Eigen::MatrixXd>& M, const std::vector<Eigen::MatrixXd>& Bf,

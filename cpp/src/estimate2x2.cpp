@@ -1,5 +1,7 @@
 #include "amb_fast/estimate2x2.hpp"
 
+#include <Eigen/LU>
+
 #include <array>
 #include <cmath>
 #include <stdexcept>
@@ -69,6 +71,58 @@ Estimate2x2 estimate_2x2(const std::complex<double>* force_lines, const std::com
             est.H[k] = H[e], est.receptance[k] = receptance[e], est.force[k] = F[e], est.displacement[k] = Y[e];
             est.var_re[k] = re[e] * scale, est.var_im[k] = im[e] * scale;
         }
+    }
+    return est;
+}
+
+Estimate2x2 estimate_nxn(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines,
+                         Eigen::Index periods, Eigen::Index lines, Eigen::Index n) {
+    require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
+    require(n >= 1, "axes", n, ">= 1");
+    using Matrix = Eigen::Matrix<cd, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    using Map = Eigen::Map<const Matrix>;
+    Estimate2x2 est;
+    est.lines = lines;
+    est.periods = periods;
+    const auto size = static_cast<std::size_t>(n * n * lines);
+    for (auto* v : {&est.H, &est.receptance, &est.force, &est.displacement}) v->resize(size);
+    est.var_re.resize(size);
+    est.var_im.resize(size);
+    const double mean = 1.0 / static_cast<double>(periods), scale = 1.0 / static_cast<double>(periods * (periods - 1));
+    // [period][line][channel][experiment]: one N x N matrix per period and line, row-major.
+    const auto at = [&](const cd* x, Eigen::Index period, Eigen::Index j) {
+        return Map(x + (period * lines + j) * n * n, n, n);
+    };
+    Matrix F(n, n), Y(n, n), dF(n, n), dH(n, n);
+    Eigen::MatrixXd re(n, n), im(n, n);
+    for (Eigen::Index j = 0; j < lines; ++j) {
+        F.setZero();
+        Y.setZero();
+        for (Eigen::Index period = 0; period < periods; ++period) {
+            F += at(force_lines, period, j);
+            Y += at(displacement_lines, period, j);
+        }
+        F *= mean;
+        Y *= mean;
+        if (!F.allFinite() || !Y.allFinite()) throw std::invalid_argument("force and displacement must be finite");
+        const Eigen::PartialPivLU<Matrix> lu(Y);
+        const Matrix Yinv = lu.inverse();
+        const Matrix H = F * Yinv;
+        const Matrix receptance = Eigen::PartialPivLU<Matrix>(H).inverse();
+        re.setZero();
+        im.setZero();
+        for (Eigen::Index period = 0; period < periods; ++period) {
+            dF = (at(force_lines, period, j) - F) - H * (at(displacement_lines, period, j) - Y);
+            dH = dF * Yinv;
+            re += dH.real().cwiseAbs2();
+            im += dH.imag().cwiseAbs2();
+        }
+        for (Eigen::Index r = 0; r < n; ++r)
+            for (Eigen::Index c = 0; c < n; ++c) {
+                const auto k = static_cast<std::size_t>((j * n + r) * n + c);
+                est.H[k] = H(r, c), est.receptance[k] = receptance(r, c), est.force[k] = F(r, c);
+                est.displacement[k] = Y(r, c), est.var_re[k] = re(r, c) * scale, est.var_im[k] = im(r, c) * scale;
+            }
     }
     return est;
 }

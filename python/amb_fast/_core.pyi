@@ -212,3 +212,6 @@ def mimo_line_sweep(
 def estimate_2x2(
     force_lines: ArrayLike, displacement_lines: ArrayLike
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...
+def estimate_nxn(
+    force_lines: ArrayLike, displacement_lines: ArrayLike
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...

@@ -21,4 +21,10 @@ struct Estimate2x2 {
 Estimate2x2 estimate_2x2(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines,
                          Eigen::Index periods, Eigen::Index lines);
 
+// The same estimate for N axes (N experiments, N channels): per line F, Y (N x N, [channel][experiment])
+// the period means, H = F Y^-1 by LU with partial pivoting, and the variances from the linearised
+// dH = (dF - H dY) Y^-1 of every period. Matrices per line, row-major N x N; `lines` of them.
+Estimate2x2 estimate_nxn(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines,
+                         Eigen::Index periods, Eigen::Index lines, Eigen::Index n);
+
 }  // namespace amb_fast

@@ -145,24 +145,17 @@ def estimate(
     experiment), complex, unscaled DFT bins; the displacements are the probes' readings (the structure's
     ``readout`` is applied here). ``H = F Y^-1`` per line with F, Y the period means; its standard errors
     from the linearised ``dH = (dF - H dY) Y^-1`` of every period."""
-    Fp = force_lines
-    Yp = mechanics.readout @ displacement_lines
-    P = Fp.shape[0]
-    require(P >= 2, "periods", P, ">= 2 (standard errors need at least two)")
-    require(bool(np.all(np.isfinite(Fp)) and np.all(np.isfinite(Yp))), "line spectra", "non-finite", "finite")
-    F, Y = Fp.mean(axis=0), Yp.mean(axis=0)
-    Y_inverse = np.linalg.inv(Y)
-    H = F @ Y_inverse
-    dH = ((Fp - F) - H @ (Yp - Y)) @ Y_inverse
-    scale = 1.0 / (P * (P - 1))
-    var_re, var_im = (dH.real**2).sum(axis=0) * scale, (dH.imag**2).sum(axis=0) * scale
+    Yp = np.ascontiguousarray(mechanics.readout @ displacement_lines)
+    require(force_lines.shape[0] >= 2, "periods", force_lines.shape[0], ">= 2 (standard errors need at least two)")
+    H, receptance, F, Y, var_re, var_im = _core.estimate_nxn(force_lines, Yp)
     actual = H - known_dynamics(mechanics, freq)
     w = (2 * np.pi * freq)[:, None, None]
     k, c = actual.real, actual.imag / w
     amplitude = 2.0 / period
-    return EstimateN(freq=freq, H=H, receptance=np.linalg.inv(H), k=k, c=c, k_smooth=median_lines(k, median_window),
+    return EstimateN(freq=freq, H=H, receptance=receptance, k=k, c=c, k_smooth=median_lines(k, median_window),
                      c_smooth=median_lines(c, median_window), k_std=np.sqrt(var_re), c_std=np.sqrt(var_im) / w,
-                     force=amplitude * F, displacement=amplitude * Y, periods=P, axes=mechanics.names)  # fmt: skip
+                     force=amplitude * F, displacement=amplitude * Y, periods=int(force_lines.shape[0]),
+                     axes=mechanics.names)  # fmt: skip
 
 
 def experiment_seeds(seed: int | None, n: int) -> list[int]:
@@ -223,12 +216,12 @@ def run_experiment(
     seeds = experiment_seeds(seed, N)
     harmonics = excitation.harmonics
     args = core_args(model, system, outputs=N)
-    F_parts, Y_parts = [], []
-    for first in range(0, N, 2):  # the core runs up to two experiments in lock step
-        Fp, Yp = _core.mimo_line_experiments(**args, period_forces=np.ascontiguousarray(forces[first : first + 2]),
-                                             settle_periods=settle, periods=periods, seeds=seeds[first : first + 2],
-                                             steady_start=start == "steady", bins=harmonics)  # fmt: skip
-        F_parts.append(Fp)
-        Y_parts.append(Yp)
-    Fp, Yp = np.concatenate(F_parts, axis=-1), np.concatenate(Y_parts, axis=-1)
+    # Drawn from the steady state, all N experiments in one call (the per-line solves once); from rest the
+    # core runs up to two in lock step.
+    step = N if start == "steady" else 2
+    parts = [_core.mimo_line_experiments(**args, period_forces=np.ascontiguousarray(forces[first : first + step]),
+                                         settle_periods=settle, periods=periods, seeds=seeds[first : first + step],
+                                         steady_start=start == "steady", bins=harmonics)
+             for first in range(0, N, step)]  # fmt: skip
+    Fp, Yp = (np.concatenate([part[i] for part in parts], axis=-1) for i in (0, 1))
     return estimate(Fp, Yp, harmonics * excitation.f0, mech, excitation.period_samples, window)
