@@ -3,6 +3,7 @@ splits into two independent masses, the equations of motion written out here, ex
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import replace
 
 import numpy as np
@@ -186,3 +187,27 @@ def test_nxn_estimator_is_the_formula(n: int) -> None:
     if n == 2:
         for got, expected in zip(af._core.estimate_2x2(Fp, Yp), (H, R, F, Y, var_re, var_im)):
             np.testing.assert_allclose(got, expected, rtol=1e-12)
+
+
+def test_bearing_views_and_ross_elements() -> None:
+    """est.bearing("A") is the A.x, A.y block of every matrix; to_ross gives one element per bearing holding
+    it, and warns that the cross-bearing entries (non-collocated probes) cannot go into ROSS's element."""
+    rig = af.RotorRig.example(speed=500.0)
+    est = af.run_experiment(rig, PID, SPHS, periods=3, seed=4)
+    for name, rows in (("A", [0, 1]), ("B", [2, 3])):
+        view = est.bearing(name)
+        np.testing.assert_array_equal(view.k, est.k[:, rows][:, :, rows])
+        np.testing.assert_array_equal(view.c_std, est.c_std[:, rows][:, :, rows])
+    with pytest.raises(ValueError, match="bearing"):
+        est.bearing("C")
+    with warnings.catch_warnings():  # ROSS's import warns about an unrelated optional library
+        warnings.simplefilter("ignore")
+        pytest.importorskip("ross")
+    with pytest.warns(UserWarning, match="cross-bearing"):
+        elements = est.to_ross((0, 4))
+    omega = 2 * np.pi * est.freq
+    for element, rows in zip(elements, ([0, 1], [2, 3])):
+        for j in (0, 5, 9):
+            np.testing.assert_allclose(element.K(omega[j])[:2, :2], est.k[j][np.ix_(rows, rows)], rtol=1e-12)
+            np.testing.assert_allclose(element.C(omega[j])[:2, :2], est.c[j][np.ix_(rows, rows)], rtol=1e-12)
+    assert [e.n for e in elements] == [0, 4]

@@ -132,7 +132,7 @@ class Estimate(ArrayRecord):
     def to_ross(self, n: int, *, smoothed: bool = False, **kwargs: Any) -> Any:
         """This estimate as a symmetric ``ross.BearingElement`` at node ``n``: k, c on both axes, no cross
         terms, over the lines in rad/s (see :func:`amb_fast.two_axis.to_ross`; needs the ``ross`` extra)."""
-        from .two_axis import to_ross
+        from ._ross import to_ross
 
         return to_ross(self, n, smoothed=smoothed, **kwargs)
 

@@ -9,9 +9,10 @@ structure's own known dynamics, ``K + j w C = H + w^2 Mb - j w W Gb`` (paper eq.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import scipy.linalg
@@ -22,6 +23,7 @@ from .._equality import ArrayRecord
 from .._excitation import Multisine
 from .._experiment import MAX_AUTOMATIC_SETTLE
 from .._linear import settle_periods_for
+from .._ross import to_ross
 from .._validate import integer, require, seed_value
 from ._control import ControllerSpec, controller_matrix
 from ._mechanics import Mechanics
@@ -130,6 +132,65 @@ class EstimateN(ArrayRecord):
     displacement: np.ndarray
     periods: int
     axes: tuple[str, ...]
+
+    def bearing(self, name: str) -> BearingEstimate:
+        """The 2x2 view of one bearing (``"A"`` or ``"B"`` of a rotor): its ``x`` and ``y`` axes' rows and
+        columns of every matrix (the cross-bearing entries left out)."""
+        rows = [j for j, axis in enumerate(self.axes) if axis.split(".")[0] == name]
+        bearings = sorted({axis.split(".")[0] for axis in self.axes if "." in axis})
+        require(len(rows) == 2, "bearing", name, f"one of {bearings} (the estimate's axes: {self.axes})")
+        pick = np.ix_(range(self.freq.size), rows, rows)
+        return BearingEstimate(name, self.freq, self.k[pick], self.c[pick], self.k_smooth[pick], self.c_smooth[pick],
+                               self.k_std[pick], self.c_std[pick], self.H[pick])  # fmt: skip
+
+    def to_ross(self, nodes: tuple[int, int], *, smoothed: bool = False, **kwargs: Any) -> list[Any]:
+        """One ``ross.BearingElement`` per bearing (A at ``nodes[0]``, B at ``nodes[1]``), each holding its
+        2x2 coefficients over the lines (see :func:`amb_fast.two_axis.to_ross`; the ``ross`` extra).
+
+        ROSS's bearing element couples the two axes of one node only: the entries between the bearings
+        (A's force from B's displacement, non-zero with probes off the bearing planes or a process between
+        them) cannot go into it, and a :class:`UserWarning` says how large they are."""
+        require(isinstance(nodes, (tuple, list)) and len(nodes) == 2, "nodes", nodes, "(node of A, node of B)")
+        k = self.k_smooth if smoothed else self.k
+        bearing_of = np.array([axis.split(".")[0] for axis in self.axes])
+        cross = bearing_of[:, None] != bearing_of[None, :]
+        worst = float(np.max(np.abs(k[:, cross]))) / float(np.max(np.abs(k[:, ~cross])))
+        if worst > 1e-9:
+            warnings.warn(f"to_ross: the cross-bearing stiffness (A from B and B from A), up to {worst:.3g} of the "
+                          "largest within-bearing entry, cannot go into ROSS's BearingElement and is left out",
+                          UserWarning, stacklevel=2)  # fmt: skip
+        return [to_ross(self.bearing(name), int(n), smoothed=smoothed, tag=f"amb_{name}", **kwargs)
+                for name, n in zip(("A", "B"), nodes)]  # fmt: skip
+
+
+@dataclass(frozen=True, eq=False)
+class BearingEstimate(ArrayRecord):
+    """The 2x2 view of one bearing of an :class:`EstimateN`: arrays (lines, 2, 2) over its ``x``, ``y``.
+
+    Attributes
+    ----------
+    name : str
+    freq : ndarray
+        Hz.
+    k, c, k_smooth, c_smooth, k_std, c_std : ndarray
+        N/m, N s/m.
+    H : ndarray
+        N/m, complex.
+    """
+
+    name: str
+    freq: np.ndarray
+    k: np.ndarray
+    c: np.ndarray
+    k_smooth: np.ndarray
+    c_smooth: np.ndarray
+    k_std: np.ndarray
+    c_std: np.ndarray
+    H: np.ndarray
+
+    def to_ross(self, n: int, *, smoothed: bool = False, **kwargs: Any) -> Any:
+        """This bearing as a ``ross.BearingElement`` at node ``n`` (:func:`amb_fast.two_axis.to_ross`)."""
+        return to_ross(self, n, smoothed=smoothed, **kwargs)
 
 
 def median_lines(x: np.ndarray, window: int) -> np.ndarray:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import sys
 
 from .._dispatch import register, register_recordings
+from .._ross import coefficient_arrays, to_ross
 from ._experiment import SIGNS, Estimate2, Trace2, excitation_pair, identify, run_experiment, simulate
 from ._model import (
     ControllerMatrix,
@@ -30,7 +31,6 @@ from ._model import (
     stability_margin,
 )
 from ._rig import TwoAxisRig
-from ._ross import coefficient_arrays, to_ross
 from ._sweep import (
     SweepResult2,
     add_two_axis_options,

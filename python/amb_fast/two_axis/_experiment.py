@@ -124,7 +124,7 @@ class Estimate2(ArrayRecord):
 
     def to_ross(self, n: int, *, smoothed: bool = False, **kwargs: Any) -> Any:
         """This estimate as a ``ross.BearingElement`` at node ``n`` (see :func:`amb_fast.two_axis.to_ross`)."""
-        from ._ross import to_ross
+        from .._ross import to_ross
 
         return to_ross(self, n, smoothed=smoothed, **kwargs)
 

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validate import require
+from ._validate import require
 
 
 def coefficient_arrays(estimate: Any, *, smoothed: bool = False) -> dict[str, np.ndarray]:
