@@ -211,3 +211,23 @@ def test_bearing_views_and_ross_elements() -> None:
             np.testing.assert_allclose(element.K(omega[j])[:2, :2], est.k[j][np.ix_(rows, rows)], rtol=1e-12)
             np.testing.assert_allclose(element.C(omega[j])[:2, :2], est.c[j][np.ix_(rows, rows)], rtol=1e-12)
     assert [e.n for e in elements] == [0, 4]
+
+
+def test_sweep_over_speed_gains_and_an_axis_field() -> None:
+    """af.sweep takes a RotorRig: parameter paths (speed, a PID gain, one axis' field); every point equals
+    run_experiment of that point bit for bit; unstable points are NaN and flagged."""
+    rig = af.RotorRig.example()
+    result = af.sweep(rig, PID, SPHS, speed=[0.0, 2000.0], kd=[10.0, 0.5], periods=3, seed=3, progress=False)
+    assert result.k.shape == (4, SPHS.freq.size, 4, 4) and result.axes == ("A.x", "A.y", "B.x", "B.y")
+    np.testing.assert_array_equal(result.stable, [True, False, True, False])  # kd = 0.5 A s/m: too little damping
+    assert np.isnan(result.k[1]).all()
+    for i in (0, 2):
+        point = {name: float(values[i]) for name, values in result.params.items()}
+        est = af.run_experiment(*af.system.point_model(rig, PID, point), SPHS, periods=3, seed=int(result.seeds[i]))
+        np.testing.assert_array_equal(est.k, result.k[i])
+    one = af.sweep(rig, PID, SPHS, periods=3, seed=1, progress=False, **{"B.y.amp_bandwidth": [1500.0]})
+    changed = af.system.point_model(rig, PID, {"B.y.amp_bandwidth": 1500.0})[0]
+    assert changed.axes[3].amp_bandwidth == 1500.0 and changed.axes[0].amp_bandwidth == rig.axes[0].amp_bandwidth
+    assert one.stable.all()
+    with pytest.raises(ValueError, match="sweep axis"):
+        af.sweep(rig, PID, SPHS, C_x_kp=[1.0])

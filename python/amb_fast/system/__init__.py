@@ -29,6 +29,7 @@ from ._model import (
     stability_margin,
 )
 from ._rotor import RigidRotor, RotorRig
+from ._sweep import SweepResultN, point_model, sweep
 
 __all__ = [
     "Campbell",
@@ -45,6 +46,7 @@ __all__ = [
     "RigidRotor",
     "RotorRig",
     "StabilityMarginN",
+    "SweepResultN",
     "closed_loop",
     "closed_loop_poles",
     "controller_matrix",
@@ -52,9 +54,11 @@ __all__ = [
     "effective_coefficients",
     "loop_model",
     "plant",
+    "point_model",
     "predict",
     "sensitivity",
     "stability_margin",
+    "sweep",
 ]
 
 # af.predict(rotor_rig, ...) and its siblings run the N-axis functions of this namespace.
