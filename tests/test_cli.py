@@ -165,7 +165,7 @@ def test_identify_checks_fs_against_the_time_column(capsys, tmp_path, monkeypatc
     monkeypatch.chdir(tmp_path)
     status, _, err = run(capsys, "identify", "rec.csv", "--fs", "4", "--settle-periods", "2")
     assert status == 2
-    assert "fs must agree with the file's time column (4000 Hz from rec.csv) within 0.1 %, got 4" in one_error_line(err)
+    assert "fs must agree with rec.csv's time column 'time' (4000 Hz) within 0.1 %, got 4" in one_error_line(err)
     assert not (tmp_path / "identify-output").exists()
 
 

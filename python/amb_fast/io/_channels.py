@@ -64,12 +64,21 @@ def _channel(channels: dict[str, np.ndarray], key: str | int, role: str, path: P
     return names[index], channels[names[index]]
 
 
+#: Names a time column goes by (compared without case and unit) when ``time`` is left at ``"time"``.
+TIME_NAMES = ("time", "t", "zeit", "timestamp", "time stamp", "temps", "tiempo", "x_value", "seconds")
+
+
 def _find(names: list[str], key: str, role: str, path: Path) -> int:
-    """The one column that ``key`` names: exactly, else without its unit, else by the last part of a path."""
+    """The one column that ``key`` names: exactly; else without case; else without its unit (and case); else
+    by the last part of a dSPACE path. A test that several columns pass is ambiguous; the columns are named
+    in every error."""
+    bare = split_unit(key)[0]
     tests = (
         lambda n: n.strip().strip('"') == key,
-        lambda n: split_unit(n)[0] == split_unit(key)[0],
-        lambda n: split_unit(n.replace("\\", "/").split("/")[-1].strip('"'))[0] == split_unit(key)[0],
+        lambda n: n.strip().strip('"').casefold() == key.casefold(),
+        lambda n: split_unit(n)[0] == bare,
+        lambda n: split_unit(n)[0].casefold() == bare.casefold(),
+        lambda n: split_unit(n.replace("\\", "/").split("/")[-1].strip('"'))[0].casefold() == bare.casefold(),
     )
     for test in tests:
         hits = [i for i, n in enumerate(names) if test(n)]
@@ -78,42 +87,113 @@ def _find(names: list[str], key: str, role: str, path: Path) -> int:
                              f"{[f'{i}: {names[i]}' for i in hits]} match; choose one by index")  # fmt: skip
         if hits:
             return hits[0]
-    raise ValueError(f"{path.name} has no channel {key!r} for the {role}; it has {names}")
+    listed = ", ".join(f"{i}: {n!r}" for i, n in enumerate(names))
+    raise ValueError(f"{path.name} has no channel {key!r} for the {role}; its columns are {listed} "
+                     "(choose one by name or 0-based index)")  # fmt: skip
 
 
-def _agree(given: float | None, found: float | None, path: Path) -> float:
+def _time_index(names: list[str], time: str | int | None, path: Path) -> int | None:
+    """The time column: ``time`` by name or index; the default ``"time"`` also finds the usual names of a
+    time column (``Time [s]``, ``TIME``, ``t [ms]``, ``Zeit``, LabVIEW's ``X_Value``, ...). None if absent."""
+    if time is None:
+        return None
+    if isinstance(time, (int, np.integer)) and not isinstance(time, bool):
+        return _index(names, int(time), "time", path)
+    try:
+        return _find(names, str(time), "time", path)
+    except ValueError:
+        if str(time) != "time":
+            raise
+    hits = [i for i, n in enumerate(names) if split_unit(n)[0].strip().casefold() in TIME_NAMES]
+    return hits[0] if len(hits) == 1 else None
+
+
+def _agree(given: float | None, found: float | None, path: Path, where: str = "time column") -> float:
     if given is None and found is None:
-        raise ValueError(f"{path.name} has neither 'fs' nor a time column: pass fs= (Hz)")
+        raise ValueError(f"{path.name} has neither 'fs' nor a time column: pass fs= (Hz; on the command line --fs)")
     if given is not None and found is not None and abs(given - found) > 1e-3 * found:
-        raise ValueError(f"fs must agree with the file's time column ({found:.10g} Hz from {path.name}) within "
-                         f"0.1 %, got {given:g}")  # fmt: skip
+        raise ValueError(f"fs must agree with {path.name}'s {where} ({found:.10g} Hz) within 0.1 %, got {given:g}")
     return float(given if given is not None else found)  # type: ignore[arg-type]
 
 
-def _fs_from_time(first: float, last: float, count: int, steps: tuple[float, float], path: Path, scale: float) -> float:
-    require(count >= 2 and last > first, "time", f"column of {path.name}", "increasing to give fs")
-    mean = (last - first) / (count - 1)
-    require(steps[0] > 0.5 * mean and steps[1] < 1.5 * mean, "time", f"column of {path.name} (steps {steps[0]:.6g} "
-            f"to {steps[1]:.6g})", "uniformly spaced to give fs (no gaps or repeats)")  # fmt: skip
-    return 1.0 / (mean * scale)
+BLOCK = 1 << 13  # samples per block of the time column's checks: their temporaries stay small
 
 
-def _file_fs(channels: dict[str, np.ndarray], time: str | int | None, path: Path) -> float | None:
+def _quantum(t: np.ndarray) -> float:
+    """The resolution the times were written with (``%.4f``: 1e-4), 0 if they look unrounded."""
+    for digits in range(0, 10):
+        ok = True
+        for a in range(0, t.size, BLOCK):
+            x = t[a : a + BLOCK] * 10.0**digits
+            if float(np.max(np.abs(x))) >= 1e15 or float(np.max(np.abs(x - np.rint(x)))) >= 1e-6:
+                ok = False
+                break
+        if ok:
+            return 10.0**-digits
+    return 0.0
+
+
+def fs_from_time(t: np.ndarray, path: Path, name: str, scale: float) -> float:
+    """The sampling frequency of a time column (in its unit; ``scale`` to s): the clock fitted over the whole
+    column by least squares.
+
+    A clock written rounded (``%.4f`` at 4 kHz: steps of 0.2 and 0.3 ms) is uniform when every sample lies
+    within half its last digit (or a quarter of a sample) of the fitted line; its fs is then the round value
+    within the fit's uncertainty (4000 Hz, not 4000.00667). A column that breaks that (a gap, a repeat, a
+    restart) is refused, naming the data row where it breaks. Computed in blocks (a long recording's column
+    is never copied whole)."""
+    t = np.asarray(t, dtype=float)
+    n = t.size
+    require(n >= 2 and bool(np.all(np.isfinite(t))), "time", f"column {name!r} of {path.name}",
+            "at least two finite times to give fs")  # fmt: skip
+    middle, mean = (n - 1) / 2.0, float(t.mean())
+
+    def k(a: int) -> np.ndarray:
+        return np.arange(a, min(a + BLOCK, n)) - middle
+
+    # Least squares over k = 0..n-1 centred: step = sum k t / sum k^2 (sum k = 0).
+    step = sum(float(k(a) @ t[a : a + BLOCK]) for a in range(0, n, BLOCK)) / (n * (n * n - 1.0) / 12.0)
+    require(step > 0, "time", f"column {name!r} of {path.name}", "increasing to give fs")
+    quantum = _quantum(t)
+    row = -1
+    for a in range(0, n - 1, BLOCK):  # the first step off the clock by more than its rounding allows
+        d = np.diff(t[a : a + BLOCK + 1])
+        bad = np.flatnonzero(np.abs(d - step) > max(quantum * (1 + 1e-6), 0.25 * step))
+        if bad.size:
+            row = a + int(bad[0]) + 1
+            break
+    if row < 0:  # steps within their rounding, but a drift: any time off the fitted clock
+        worst = [float(np.max(np.abs(t[a : a + BLOCK] - mean - step * k(a)))) for a in range(0, n, BLOCK)]
+        if max(worst) > max(0.5 * quantum * (1 + 1e-6), 0.25 * step):
+            a = BLOCK * int(np.argmax(worst))
+            row = max(1, a + int(np.argmax(np.abs(t[a : a + BLOCK] - mean - step * k(a)))))
+    if row > 0:
+        raise ValueError(f"{path.name}: the time column {name!r} is not a uniform clock: at data row {row} "
+                         f"(t = {t[row]:.10g}) the step is {t[row] - t[row - 1]:.6g} against {step:.6g} fitted over "
+                         f"all {n} rows (a gap, a repeat or a restart); pass fs= (Hz; on the command line --fs), "
+                         "or time=None to ignore the column")  # fmt: skip
+    fs = 1.0 / (step * scale)
+    # The fit's uncertainty with the times rounded to `quantum` (uniform errors): about q / n^1.5 in the step.
+    spread = 3.0 * max(quantum, 1e-15 * max(abs(float(t[0])), abs(float(t[-1])))) / n**1.5 / step * fs
+    for decimals in range(-int(np.floor(np.log10(fs))), 12):
+        candidate = round(fs, decimals)
+        if abs(candidate - fs) <= spread:
+            return float(candidate)
+    return fs
+
+
+def _file_fs(channels: dict[str, np.ndarray], time: str | int | None, path: Path) -> tuple[float | None, str]:
+    """fs (Hz) from a file's ``fs`` variable or its time column, and where it came from."""
     names = list(channels)
     if "fs" in channels:
-        return float(np.ravel(channels["fs"])[0])
-    if time is None:
-        return None
-    try:
-        index = _find(names, str(time), "time", path) if not isinstance(time, int) else time
-    except ValueError:
-        return None
+        return float(np.ravel(channels["fs"])[0]), "'fs' variable"
+    index = _time_index(names, time, path)
+    if index is None:
+        return None, ""
     values = np.ravel(channels[names[index]]).astype(float)
     if values.size < 2:
-        return None
-    steps = np.diff(values)
-    return _fs_from_time(values[0], values[-1], values.size, (steps.min(), steps.max()), path,
-                         _scale(names[index], "time", path))  # fmt: skip
+        return None, ""
+    return fs_from_time(values, path, names[index], _scale(names[index], "time", path)), f"time column {names[index]!r}"
 
 
 def _choose_recording(

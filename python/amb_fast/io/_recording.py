@@ -131,8 +131,9 @@ def load_recording(
     y_name, y_values = _channel(channels, displacement, "displacement", path)
     f_values = f_values * _scale(f_name, "force", path)
     y_values = y_values * _scale(y_name, "displacement", path)
-    found = _file_fs(channels, time, path)
-    fs = _agree(fs, found, path)
+    found, origin = _file_fs(channels, time, path)
+    fs = _agree(fs, found, path, origin)
     where = f"{path.name}" + (f" recording {name!r}" if name else "")
+    clock = f"; fs {fs:.10g} Hz from its {origin}" if found is not None else f"; fs {fs:.10g} Hz given"
     return Recording(series("force", f_values), series("displacement", y_values), fs,
-                     f"{where}: force {f_name!r}, displacement {y_name!r}")  # fmt: skip
+                     f"{where}: force {f_name!r}, displacement {y_name!r}{clock}")  # fmt: skip

@@ -7,7 +7,6 @@ chosen columns (pandas' C parser when installed, numpy's ``loadtxt`` otherwise).
 from __future__ import annotations
 
 import csv
-import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .._validate import require
-from ._channels import _agree, _find, _fs_from_time, _index, _scale, split_unit
+from ._channels import UNITS, _agree, _index, _scale, _time_index, fs_from_time, split_unit
 
 CHUNK_BYTES = 1 << 16  # text per chunk when reading: bounds the memory beyond the two channels
 WIDE = 16  # columns beyond which text is parsed by numpy (smaller buffers) even with pandas installed
@@ -48,43 +47,77 @@ def _split(line: str, delimiter: str | None) -> list[str]:
     return next(csv.reader([line], delimiter=delimiter, quotechar='"', skipinitialspace=True))
 
 
+def _fields(line: str, delimiter: str | None) -> list[str]:
+    """A line's fields; a delimiter ending every line (some DAQs write one) leaves no empty last field."""
+    fields = _split(line, delimiter)
+    if delimiter is not None and len(fields) > 1 and not fields[-1].strip():
+        fields = fields[:-1]
+    return fields
+
+
+def _data_start(rows: list[list[str]], decimal_comma: bool) -> int | None:
+    """Index of the first row from which every row (to the end of the sample) is numeric with one field count
+    of at least 2 (a last row cut short by the sample's end is allowed); None if there is no such block."""
+    numeric = [len(r) >= 2 and all(_numeric(f, decimal_comma) for f in r) for r in rows]
+    for start in range(len(rows)):
+        if not numeric[start]:
+            continue
+        width = len(rows[start])
+        body = rows[start:]
+        whole = [numeric[start + j] and len(r) == width for j, r in enumerate(body)]
+        if all(whole[:-1]) and (whole[-1] or len(body) > 2):
+            return start
+    return None
+
+
 def sniff(path: Path) -> _Dialect:
-    """Delimiter, decimal comma, column names and the lines before the data of a text recording."""
+    """Delimiter, decimal comma, column names and the lines before the data of a text recording.
+
+    The data are the block of numeric rows that runs to the end of the file's first lines; the header is
+    the row just before it with as many fields (a units row may sit between them), and anything before is
+    metadata (LabVIEW's ``***End_of_Header***`` blocks, a DAQ's ``key: value`` preamble) and skipped. A file
+    without a header row has its columns named ``column 0``, ``column 1``, ... (choose them by index)."""
     with open(path, encoding="utf-8-sig", errors="replace", newline="") as handle:
         lines = []
         for line in handle:
             lines.append(line.rstrip("\r\n"))
-            if len(lines) >= 64:
+            if len(lines) >= 256:
                 break
-    skip = 0
-    while skip < len(lines) and (not lines[skip].strip() or lines[skip].lstrip().startswith(("#", "%"))):
-        skip += 1
-    if skip >= len(lines):
-        raise ValueError(f"{path.name} has no header row naming the columns")
-    header = lines[skip]
-    body = [line for line in lines[skip + 1 :] if line.strip() and not line.lstrip().startswith(("#", "%"))]
-    candidates: list[str | None] = ["\t", ";", ","] if "\t" in header or ";" in header or "," in header else []
+    kept = [j for j, line in enumerate(lines) if line.strip() and not line.lstrip().startswith(("#", "%"))]
+    if not kept:
+        raise ValueError(f"{path.name} has no rows of numbers")
+    sample = "\n".join(lines[j] for j in kept[-16:])
+    candidates: list[str | None] = [d for d in ("\t", ";", ",") if d in sample]
     candidates.append(None)
     for delimiter in candidates:
-        names = [n.strip() for n in _split(header, delimiter)]
-        if len(names) < 2:
-            continue
+        rows = [_fields(lines[j], delimiter) for j in kept]
         for decimal_comma in (False, True):
             if decimal_comma and delimiter == ",":
                 continue
-            rows = [_split(line, delimiter) for line in body]
-            numeric = [r for r in rows if len(r) == len(names) and all(_numeric(f, decimal_comma) for f in r)]
-            if len(numeric) >= max(1, len(rows) - 1):
-                units_row = bool(rows) and not all(_numeric(f, decimal_comma) for f in rows[0])
-                if units_row:
-                    units = [u.strip().strip("[]()") for u in rows[0]]
-                    require(len(units) == len(names), "units row", rows[0], f"{len(names)} fields like the header")
-                    names = [f"{n} [{u}]" if u and split_unit(n)[1] is None else n for n, u in zip(names, units)]
-                percent = any(line.lstrip().startswith("%") for line in lines[skip + 1 :])
-                width = max(16, int(np.mean([len(line) + 1 for line in body]))) if body else 64
-                return _Dialect(delimiter, decimal_comma, names, skip + 1 + int(units_row), percent, width)
-    raise ValueError(f"{path.name}: could not read it as a table (a header row naming the columns, then rows of "
-                     "numbers separated by ',', ';', tabs or blanks)")  # fmt: skip
+            start = _data_start(rows, decimal_comma)
+            if start is None:
+                continue
+            width = len(rows[start])
+            # The header has the data's fields, or one more whose column is empty (LabVIEW's "Comment").
+            before = [r[:width] for r in rows[max(0, start - 2) : start] if len(r) in (width, width + 1)]
+            units_row = len(before) == 2 and all(
+                u.strip().strip("[]()").lower() in UNITS for u in before[1] if u.strip()
+            )
+            if units_row:  # a header, then a units row
+                names = [n.strip() for n in before[0]]
+                units = [u.strip().strip("[]()") for u in before[1]]
+                names = [f"{n} [{u}]" if u and split_unit(n)[1] is None else n for n, u in zip(names, units)]
+            elif start >= 1 and len(rows[start - 1]) in (width, width + 1):
+                names = [n.strip() for n in rows[start - 1][:width]]
+            else:  # no header row: columns by index
+                names = [f"column {c}" for c in range(width)]
+            skip = kept[start]
+            percent = any(line.lstrip().startswith("%") for line in lines[skip:])
+            body = [lines[j] for j in kept[start:]]
+            line_bytes = max(16, int(np.mean([len(line) + 1 for line in body])))
+            return _Dialect(delimiter, decimal_comma, names, skip, percent, line_bytes)
+    raise ValueError(f"{path.name}: could not read it as a table (rows of numbers separated by ',', ';', tabs or "
+                     "blanks, after an optional header row naming the columns)")  # fmt: skip
 
 
 def _load_text(
@@ -93,42 +126,32 @@ def _load_text(
     """Force (N), displacement (m), fs (Hz) and the source of a text recording: the fields of its Recording."""
     dialect = sniff(path)
     names = dialect.names
-    columns = [_index(names, force, "force", path), _index(names, displacement, "displacement", path)]
+    headerless = names[0] == "column 0"
+    try:
+        columns = [_index(names, force, "force", path), _index(names, displacement, "displacement", path)]
+    except ValueError as error:
+        if headerless:
+            raise ValueError(f"{path.name} has no header row naming its {len(names)} columns: choose the force and "
+                             "the displacement by 0-based index (force=1, displacement=2; on the command line "
+                             "--force 1 --displacement 2)") from error  # fmt: skip
+        raise
     f_name, y_name = names[columns[0]], names[columns[1]]
-    t_index: int | None = None
-    if time is not None:
-        try:
-            t_index = _find(names, str(time), "time", path) if not isinstance(time, int) else time
-        except ValueError:
-            t_index = None
+    t_index = None if headerless and not isinstance(time, int) else _time_index(names, time, path)
     use = columns + ([t_index] if t_index is not None else [])
     count = _count_rows(path, dialect.skip)
-    out = np.empty((2, count))
-    first = last = math.nan
-    steps = (math.inf, -math.inf)
-    previous = math.nan
+    out = np.empty((len(use), count))
     row = 0
     for chunk in _chunks(path, dialect, use):  # the chosen columns, in the order of `use`
         n = chunk.shape[0]
         require(row + n <= count, "rows", f"of {path.name}", "countable (the file changed while being read)")
-        out[:, row : row + n] = chunk[:, :2].T
-        if t_index is not None and n:
-            t = chunk[:, 2]
-            if row == 0:
-                first = float(t[0])
-            else:
-                gap = float(t[0] - previous)
-                steps = (min(steps[0], gap), max(steps[1], gap))
-            if n > 1:
-                d = np.diff(t)
-                steps = (min(steps[0], float(d.min())), max(steps[1], float(d.max())))
-            previous = last = float(t[-1])
+        out[:, row : row + n] = chunk.T
         row += n
     out = out[:, :row]
-    found = None
+    found, origin = None, ""
     if t_index is not None and row >= 2:
-        found = _fs_from_time(first, last, row, steps, path, _scale(names[t_index], "time", path))
-    fs = _agree(fs, found, path)
+        found = fs_from_time(out[2], path, names[t_index], _scale(names[t_index], "time", path))
+        origin = f"time column {names[t_index]!r}"
+    fs = _agree(fs, found, path, origin)
     force_values = out[0]
     displacement_values = out[1]
     scale_f, scale_y = _scale(f_name, "force", path), _scale(y_name, "displacement", path)
@@ -136,7 +159,9 @@ def _load_text(
         force_values *= scale_f
     if scale_y != 1.0:
         displacement_values *= scale_y
-    return force_values, displacement_values, fs, f"{path.name}: force {f_name!r}, displacement {y_name!r}"
+    clock = f"; fs {fs:.10g} Hz from its {origin}" if found is not None else f"; fs {fs:.10g} Hz given"
+    return (np.ascontiguousarray(force_values), np.ascontiguousarray(displacement_values), fs,
+            f"{path.name}: force {f_name!r}, displacement {y_name!r}{clock}")  # fmt: skip
 
 
 def _chunks(path: Path, dialect: _Dialect, use: list[int]) -> Iterator[np.ndarray]:

@@ -1,0 +1,109 @@
+"""Files as acquisition systems write them (issue 25, cases 4-6): rounded clocks, headers with units and
+other cases, metadata before the header, trailing delimiters, files with no header."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import amb_fast as af
+
+FS = 4000.0
+
+
+@pytest.fixture(scope="module")
+def channels() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    ms = af.schroeder_multisine(f0=1.0, f_max=200.0)
+    trace = af.simulate(af.Rig.paper(), af.PID.paper(), np.tile(ms.samples, 4), seed=2)
+    return trace.time, trace.force, trace.displacement
+
+
+def write(path, header: str, columns: list[np.ndarray], formats: list[str], sep: str = ",", end: str = "") -> None:
+    rows = [sep.join(f % v for f, v in zip(formats, row)) + end for row in zip(*columns)]
+    path.write_text(header + "\n".join(rows) + "\n")
+
+
+def test_a_rounded_clock_gives_its_round_fs_and_identify_runs(tmp_path, channels) -> None:
+    """%.4f at 4 kHz: steps of 0.2 and 0.3 ms; the fit over the column gives 4000 Hz (was 4000.00667)."""
+    t, f, y = channels
+    path = tmp_path / "rounded.csv"
+    write(path, "time,force,displacement\n", [t, f, y], ["%.4f", "%.17g", "%.17g"])
+    rec = af.load_recording(path)
+    assert rec.fs == 4000.0
+    assert "fs 4000 Hz from its time column 'time'" in rec.source
+    est = af.identify(rec.force, rec.displacement, fs=rec.fs, f0=1.0, mass=0.92, settle_periods=1)
+    assert est.freq.size == 200
+    # Milliseconds with three decimals (0.25 ms steps written 0.250, 0.500, ...): exact, 4000 Hz too.
+    ms = tmp_path / "ms.csv"
+    write(ms, "t [ms],force,displacement\n", [t * 1e3, f, y], ["%.3f", "%.17g", "%.17g"])
+    assert af.load_recording(ms).fs == 4000.0
+
+
+def test_a_clock_that_jumps_is_refused_naming_the_row(tmp_path, channels) -> None:
+    t, f, y = channels
+    jumped = t.copy()
+    jumped[5000:] += 0.5 / FS  # half a sample late from row 5000 on
+    path = tmp_path / "jump.csv"
+    write(path, "time,force,displacement\n", [jumped, f, y], ["%.6f", "%.17g", "%.17g"])
+    with pytest.raises(ValueError, match=r"time column 'time' is not a uniform clock: at data row 5000"):
+        af.load_recording(path)
+    assert af.load_recording(path, time=None, fs=FS).fs == FS  # the way out the message names
+
+
+@pytest.mark.parametrize(
+    ("header", "time_scale", "y_scale"),
+    [("Time [s],Force [N],Displacement [um]", 1.0, 1e-6), ("TIME,FORCE,DISPLACEMENT", 1.0, 1.0),
+     ("Time (s),Force (N),Displacement (m)", 1.0, 1.0), ("t [ms],force [N],displacement [mm]", 1e3, 1e-3),
+     ("Zeit [s],Force,Displacement", 1.0, 1.0)],
+)  # fmt: skip
+def test_usual_headers_are_found_with_the_defaults(tmp_path, channels, header, time_scale, y_scale) -> None:
+    t, f, y = channels
+    path = tmp_path / "headers.csv"
+    write(path, header + "\n", [t * time_scale, f, y / y_scale], ["%.10f", "%.17g", "%.17g"])
+    rec = af.load_recording(path)
+    assert rec.fs == FS
+    np.testing.assert_allclose(rec.displacement, y, rtol=1e-14)
+    np.testing.assert_array_equal(rec.force, f)
+
+
+def test_not_found_names_the_columns(tmp_path, channels) -> None:
+    t, f, y = channels
+    path = tmp_path / "other.csv"
+    write(path, "time,F_shaker,x_probe\n", [t, f, y], ["%.10f", "%.17g", "%.17g"])
+    with pytest.raises(ValueError, match=r"no channel 'force' for the force; its columns are 0: 'time', 1: "
+                       r"'F_shaker', 2: 'x_probe'"):  # fmt: skip
+        af.load_recording(path)
+    rec = af.load_recording(path, force="f_shaker", displacement="X_PROBE")  # without case
+    np.testing.assert_array_equal(rec.force, f)
+
+
+def test_metadata_before_the_header_and_trailing_delimiters(tmp_path, channels) -> None:
+    """LabVIEW's LVM header blocks, a DAQ's key: value preamble, a delimiter ending every line: the header is
+    found, and no sample is lost."""
+    t, f, y = channels
+    lvm = tmp_path / "run.lvm.txt"
+    block = "LabVIEW Measurement\t\nWriter_Version\t2\nSeparator\tTab\nDecimal_Separator\t.\n***End_of_Header***\t\n\n"
+    segment = "Channels\t2\t\nSamples\t16000\t16000\t\nDate\t2026/11/27\t2026/11/27\t\n***End_of_Header***\t\n"
+    write(lvm, block + segment + "X_Value\tForce\tDisplacement\tComment\n", [t, f, y], ["%.6f", "%.17g", "%.17g"],
+          sep="\t", end="\t")  # fmt: skip
+    rec = af.load_recording(lvm)
+    assert rec.fs == FS and rec.force.size == t.size
+    np.testing.assert_array_equal(rec.force, f)
+    daq = tmp_path / "daq.csv"
+    write(daq, "Device: NI 9234\nSample rate: 4000 Hz\nOperator: test\ntime,force,displacement\n", [t, f, y],
+          ["%.6f", "%.17g", "%.17g"], end=",")  # fmt: skip
+    rec = af.load_recording(daq)
+    np.testing.assert_array_equal(rec.displacement, y)
+    assert rec.force.size == t.size
+
+
+def test_a_file_without_header_is_read_by_index_and_loses_no_sample(tmp_path, channels) -> None:
+    t, f, y = channels
+    path = tmp_path / "bare.csv"
+    write(path, "", [t, f, y], ["%.6f", "%.17g", "%.17g"])
+    with pytest.raises(ValueError, match=r"no header row naming its 3 columns: choose the force and the displacement"):
+        af.load_recording(path)
+    rec = af.load_recording(path, force=1, displacement=2, time=0)
+    assert rec.force.size == t.size and rec.fs == FS
+    np.testing.assert_array_equal(rec.force, f)
+    assert af.load_recording(path, force=1, displacement=2, fs=FS).force[0] == f[0]  # the first row is data
