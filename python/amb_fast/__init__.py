@@ -50,7 +50,16 @@ from .controllers import (
     series,
 )
 from .io import Recording, load_estimate, load_recording, save_recording
-from .system import Campbell, EstimateN, RigidRotor, RotorRig, campbell
+from .system import (
+    Campbell,
+    EstimateN,
+    RigidRotor,
+    RotorRig,
+    SensitivityMeasurement,
+    campbell,
+    identify_sensitivity,
+    measure_sensitivity,
+)
 from .two_axis import Estimate2, TwoAxisRig, plot_coefficients2
 
 if TYPE_CHECKING:
@@ -92,6 +101,7 @@ __all__ = [
     "EstimateN",
     "RigidRotor",
     "RotorRig",
+    "SensitivityMeasurement",
     "campbell",
     "PID",
     "Controller",
@@ -126,9 +136,11 @@ __all__ = [
     "closed_loop_poles",
     "effective_coefficients",
     "identify",
+    "identify_sensitivity",
     "load_estimate",
     "load_recording",
     "load_sweep",
+    "measure_sensitivity",
     "plot_actual",
     "plot_coefficients",
     "plot_coefficients2",

@@ -141,8 +141,12 @@ def iso_zone(peak: float) -> str:
 
 
 @axes_aware
-def sensitivity(rig: Rig, pid: AnyController, freq: ArrayLike) -> np.ndarray:
-    """Sensitivity S = 1/(1 + L) with the loop broken at the controller output, at ``freq`` (Hz)."""
+def sensitivity(rig: Rig, pid: AnyController, freq: ArrayLike, *, at: str = "controller") -> np.ndarray:
+    """Sensitivity S = 1/(1 + L) with the loop broken at the controller output, at ``freq`` (Hz).
+
+    ``at``: ``"controller"`` or ``"sensors"`` (the summing point of ISO 14839-3's test signal); on one axis
+    both are the same, on N axes ``(I - K P)^-1`` and ``(I - P K)^-1``."""
+    require(at in ("controller", "sensors"), "at", at, "'controller' or 'sensors'")
     rig_and_controller(rig, pid, "sensitivity")
     f = _frequencies(freq, pid.fs)
     Phi, Gamma, states = discrete_plant(rig, pid.fs)

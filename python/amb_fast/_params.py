@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from . import _core
+from ._mechanics import Mechanics
 from ._validate import integer, optional_positive, real, require
 
 if TYPE_CHECKING:
@@ -154,6 +155,16 @@ class Rig:
     def moving_mass(self) -> float:
         """Mass the dynamics move, kg: ``mass + mass_loading``."""
         return self.mass + self.mass_loading
+
+    @property
+    def axes(self) -> tuple[Rig]:
+        """``(self,)``: the one axis' chain, as the model of N axes reads a rig (this is its 1x1 case)."""
+        return (self,)
+
+    def mechanics(self) -> Mechanics:
+        """The platform as a structure of one coordinate ``y``: mass ``m``, its actuator, shaker and probe on
+        it (the model of N axes, :mod:`amb_fast.system`, for N = 1)."""
+        return _platform(self.mass)
 
 
 @dataclass(frozen=True)
@@ -304,3 +315,11 @@ def _cached_core_controller(A: bytes, B: bytes, C: bytes, D: float, n: int, fs: 
         fs=fs,
         delay=delay,
     )
+
+
+@functools.lru_cache(maxsize=64)
+def _platform(mass: float) -> Mechanics:
+    one, zero = np.ones((1, 1)), np.zeros((1, 1))
+    for matrix in (one, zero):
+        matrix.flags.writeable = False
+    return Mechanics(mass * one, zero, zero, zero, one, one, one, 0.0, ("y",), ("y",))

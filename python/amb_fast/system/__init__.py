@@ -11,10 +11,10 @@ from __future__ import annotations
 import sys
 
 from .._dispatch import register
+from .._mechanics import Mechanics
 from ._campbell import Campbell, campbell
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
 from ._experiment import EstimateN, TraceN, hadamard_signs, run_experiment, simulate
-from ._mechanics import Mechanics
 from ._model import (
     LoopModel,
     StabilityMarginN,
@@ -29,6 +29,7 @@ from ._model import (
     stability_margin,
 )
 from ._rotor import RigidRotor, RotorRig
+from ._sensitivity import SensitivityMeasurement, identify_sensitivity, measure_sensitivity
 from ._sweep import SweepResultN, point_model, sweep
 
 __all__ = [
@@ -37,6 +38,8 @@ __all__ = [
     "TraceN",
     "campbell",
     "hadamard_signs",
+    "identify_sensitivity",
+    "measure_sensitivity",
     "run_experiment",
     "simulate",
     "ControllerMatrix",
@@ -45,6 +48,7 @@ __all__ = [
     "Mechanics",
     "RigidRotor",
     "RotorRig",
+    "SensitivityMeasurement",
     "StabilityMarginN",
     "SweepResultN",
     "closed_loop",

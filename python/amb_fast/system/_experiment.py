@@ -23,10 +23,10 @@ from .._equality import ArrayRecord
 from .._excitation import Multisine
 from .._experiment import MAX_AUTOMATIC_SETTLE
 from .._linear import settle_periods_for
+from .._mechanics import Mechanics
 from .._ross import to_ross
 from .._validate import integer, require, seed_value
 from ._control import ControllerSpec, controller_matrix
-from ._mechanics import Mechanics
 from ._model import LoopModel, System, known_dynamics, loop_model, require_stable
 
 

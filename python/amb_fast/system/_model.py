@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, Literal, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -32,10 +32,10 @@ from .._linear import (
     transducer_response,
     zoh,
 )
+from .._mechanics import Mechanics
 from .._params import Rig
 from .._validate import require
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix, controller_state_space
-from ._mechanics import Mechanics
 
 
 class System(Protocol):
@@ -290,10 +290,15 @@ def controller_frequency_response(controller: ControllerSpec, n: int, z: np.ndar
     return Dc + (state_response(Ac, Bc, Cc, z, frequency_first=True) if Ac.size else 0.0)
 
 
-def sensitivity(system: System, controller: ControllerSpec, freq: ArrayLike) -> np.ndarray:
-    """Sensitivity ``S = (I - K P)^-1`` at the controller outputs, shape (len(freq), N, N).
+def sensitivity(
+    system: System, controller: ControllerSpec, freq: ArrayLike, *, at: Literal["controller", "sensors"] = "controller"
+) -> np.ndarray:
+    """Sensitivity of the loop, shape (len(freq), N, N): ``(I - K P)^-1`` at the controller outputs, or with
+    ``at="sensors"`` ``(I - P K)^-1`` at the summing point of the sensors' signals (where ISO 14839-3 injects
+    its test signal: :func:`measure_sensitivity`). One axis: both are the SISO ``1 / (1 - K P)``.
 
     ``P``: current commands to probe readings; ``K``: the controller matrix (delays included)."""
+    require(at in ("controller", "sensors"), "at", at, "'controller' or 'sensors'")
     model = loop_model(system, controller)
     N = model.Bf.shape[1]
     f = frequencies(freq, model.fs)
@@ -303,7 +308,7 @@ def sensitivity(system: System, controller: ControllerSpec, freq: ArrayLike) -> 
     S[:, : plant(system)[0].shape[0]] = sensor_rows(system)
     P = state_response(Phi, Gamma[:, N:], S, z, frequency_first=True)
     K = controller_frequency_response(controller, N, z)
-    return np.linalg.inv(np.eye(N) - K @ P)
+    return np.linalg.inv(np.eye(N) - (K @ P if at == "controller" else P @ K))
 
 
 @dataclass(frozen=True)

@@ -15,9 +15,9 @@ from typing import Any, Union
 
 import numpy as np
 
+from .._mechanics import Mechanics
 from .._params import PID, Rig
 from .._validate import real, require
-from ._mechanics import Mechanics
 
 AXES = ("A.x", "A.y", "B.x", "B.y")
 

@@ -6,9 +6,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._mechanics import Mechanics
 from .._params import Rig
 from .._validate import real, require
-from ..system._mechanics import Mechanics
 
 
 @dataclass(frozen=True)

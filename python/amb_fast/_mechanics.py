@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._equality import ArrayRecord
+from ._equality import ArrayRecord
 
 
 @dataclass(frozen=True, eq=False)
