@@ -231,3 +231,66 @@ def test_sweep_over_speed_gains_and_an_axis_field() -> None:
     assert one.stable.all()
     with pytest.raises(ValueError, match="sweep axis"):
         af.sweep(rig, PID, SPHS, C_x_kp=[1.0])
+
+
+def test_unbalance_response_is_an_orbit_of_the_continuous_loop() -> None:
+    """The synchronous response is exact at the sample instants: started on it, the continuous plant
+    integrated with fine RK4 steps under the rotating force (continuous, not held) and the digital
+    controller acting at the samples stays on it (to the integrator's error), for 200 samples."""
+    rotor = replace(af.RotorRig.example().rotor, speed=0.0)
+    rig = af.RotorRig(rotor, af.Rig(amp_bandwidth=3000.0))
+    W, me, z = 700.0, 2e-4, 0.12
+    result = af.unbalance_response(rig, PID, [W], [(me, z, 0.3)])
+    system = rig.at_speed(W)
+    A, B, layout = _model.plant(system)
+    loop = _model.loop_model(system, PID)
+    n = A.shape[0]
+    # The digital side read back from the closed loop [[Phi + Gu Dc S, Gu Cc], [Bc S, Ac]]: the controller's
+    # update x_c' = Mcp x_p + Mcc x_c, and its commands u = U [x_p; x_c] (Gu has full column rank).
+    Mcp, Mcc = loop.M[n:, :n], loop.M[n:, n:]
+    Phi, Gamma, _ = _model.discrete_plant(system, 4000.0)
+    U = np.linalg.lstsq(Gamma[:, 4:], loop.M[:n, :] - np.hstack([Phi, np.zeros((n, Mcc.shape[0]))]), rcond=None)[0]
+    m = np.diag([rotor.mass] * 2 + [rotor.transverse_inertia] * 2)
+    P = np.array([[1, 0, 0, z], [0, 1, -z, 0]], dtype=float)
+    phase = np.exp(0.3j)
+
+    def rhs(t: float, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+        force = me * W**2 * np.real(np.array([1.0, -1j]) * phase * np.exp(1j * W * t))
+        extra = np.zeros(n)
+        extra[list(layout.velocity)] = np.linalg.solve(m, P.T @ force)
+        return A @ x + B[:, 4:] @ u + extra
+
+    X = result.states[0]
+    state = np.real(X)
+    T, steps = 1 / 4000.0, 100
+    h = T / steps
+    worst = 0.0
+    for k in range(200):
+        u = U @ state
+        x, xc = state[:n].copy(), state[n:]
+        t = k * T
+        for _ in range(steps):
+            k1 = rhs(t, x, u)
+            k2 = rhs(t + h / 2, x + h / 2 * k1, u)
+            k3 = rhs(t + h / 2, x + h / 2 * k2, u)
+            k4 = rhs(t + h, x + h * k3, u)
+            x, t = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4), t + h
+        state = np.concatenate([x, Mcp @ state[:n] + Mcc @ xc])
+        expected = np.real(X * np.exp(1j * W * T * (k + 1)))
+        worst = max(worst, float(np.max(np.abs(loop.C[:4] @ (state - expected)))))
+    assert worst < 1e-6 * np.max(np.abs(result.probes))
+    # A held force in place of the rotating one would leave the orbit at once: the test can tell.
+    assert np.max(np.abs(result.probes)) > 1e-7
+
+
+def test_unbalance_bad_input_names_the_value() -> None:
+    rig = af.RotorRig.example()
+    with pytest.raises(ValueError, match="unbalance\\[0\\] plane"):
+        af.unbalance_response(rig, PID, [100.0], [(1e-4, 5.0, 0.0)])
+    with pytest.raises(ValueError, match="speeds"):
+        af.unbalance_response(rig, PID, [100.0, np.inf], [(1e-4, 0.0, 0.0)])
+    with pytest.raises(ValueError, match="unbalance"):
+        af.unbalance_response(rig, PID, [100.0], [])
+    unstable = af.RotorRig(replace(rig.rotor, process=((0.0, 3e5, -3e5, 0.0, 0.0),)), rig.axes)
+    with pytest.raises(af.UnstableLoopError, match="at speed 100 rad/s"):
+        af.unbalance_response(unstable, PID, [100.0], [(1e-4, 0.0, 0.0)])

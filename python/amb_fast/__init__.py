@@ -56,9 +56,11 @@ from .system import (
     RigidRotor,
     RotorRig,
     SensitivityMeasurement,
+    UnbalanceResponse,
     campbell,
     identify_sensitivity,
     measure_sensitivity,
+    unbalance_response,
 )
 from .two_axis import Estimate2, TwoAxisRig, plot_coefficients2
 
@@ -129,6 +131,7 @@ __all__ = [
     "TouchdownError",
     "Trace",
     "TwoAxisRig",
+    "UnbalanceResponse",
     "UnexcitedLines",
     "UnstableLoopError",
     "__version__",
@@ -156,4 +159,5 @@ __all__ = [
     "simulate",
     "stability_margin",
     "sweep",
+    "unbalance_response",
 ]

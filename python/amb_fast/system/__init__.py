@@ -31,11 +31,13 @@ from ._model import (
 from ._rotor import RigidRotor, RotorRig
 from ._sensitivity import SensitivityMeasurement, identify_sensitivity, measure_sensitivity
 from ._sweep import SweepResultN, point_model, sweep
+from ._unbalance import UnbalanceResponse, unbalance_response
 
 __all__ = [
     "Campbell",
     "EstimateN",
     "TraceN",
+    "UnbalanceResponse",
     "campbell",
     "hadamard_signs",
     "identify_sensitivity",
@@ -63,6 +65,7 @@ __all__ = [
     "sensitivity",
     "stability_margin",
     "sweep",
+    "unbalance_response",
 ]
 
 # af.predict(rotor_rig, ...) and its siblings run the N-axis functions of this namespace.
