@@ -43,6 +43,7 @@ from ._options import (
     _Parser,
     _values,
 )
+from ._rotor import add_rotor_parser
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -56,7 +57,7 @@ def build_parser() -> argparse.ArgumentParser:
         "SI units: N, m, A, s, kg; frequencies in Hz; gains kp A/m, ki A/(m s), kd A s/m.",
     )
     parser.add_argument("--version", action="version", version=f"amb-fast {version()}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="{paper,run,sweep,identify,fit,design}",
+    sub = parser.add_subparsers(dest="command", required=True, metavar="{paper,run,sweep,identify,fit,design,rotor}",
                                 parser_class=_Parser)  # fmt: skip
 
     paper = sub.add_parser(
@@ -131,6 +132,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_fit_parser(sub, parents=[common])
     add_design_parser(sub, parents=[common])
+    add_rotor_parser(sub, parents=[common])
     return parser
 
 

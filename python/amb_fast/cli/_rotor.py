@@ -1,0 +1,100 @@
+"""``amb-fast rotor``: the Campbell diagram, the ISO 14839-3 sensitivity table and the unbalance run-up of a
+rotor on two magnetic bearings, described by a rotor file (TOML) or ``RotorRig.example()``."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._excitation import schroeder_multisine
+from ..system import RotorRig, campbell, measure_sensitivity, unbalance_response
+from ..system._file import load_rotor
+from ._options import FIGURE_SUFFIXES, UsageError, _needs, _save_figure, _started, _values, check_output
+
+
+def add_rotor_parser(subparsers: Any, parents: list[argparse.ArgumentParser]) -> None:
+    rotor = subparsers.add_parser("rotor", allow_abbrev=False, parents=parents,
+                                  help="a rotor on two bearings: campbell | sensitivity | unbalance")  # fmt: skip
+    rotor.add_argument("step", choices=["campbell", "sensitivity", "unbalance"],
+                       help="campbell: poles against speed; sensitivity: the ISO 14839-3 table per axis; "
+                       "unbalance: the run-up's synchronous response")  # fmt: skip
+    rotor.add_argument("--rotor", type=Path, help="rotor file (.toml; default RotorRig.example() under its PID)")
+    rotor.add_argument("--speeds", type=_values, help="rad/s, 'a,b,c' or 'start:stop:count' (default 0:6000:61 for "
+                       "campbell, 10:600:120 for unbalance; sensitivity: the rotor's speed)")  # fmt: skip
+    rotor.add_argument("--unbalance", default="1e-4,0.1,0",
+                       help="m_e (kg m), z (m), phase (rad) of the unbalance (default 1e-4,0.1,0)")  # fmt: skip
+    rotor.add_argument("--periods", type=int, default=10, help="periods averaged (sensitivity; default 10)")
+    rotor.add_argument("--seed", type=int, default=1, help="seed of the probes' noise (sensitivity)")
+    rotor.add_argument("--figure", type=Path, help="write a figure (.png, .pdf or .svg): campbell and unbalance")
+    rotor.set_defaults(func=cmd_rotor)
+
+
+def _unbalance(text: str) -> list[tuple[float, float, float]]:
+    try:
+        me, z, phase = (float(v) for v in text.split(","))
+    except ValueError:
+        raise UsageError(f"--unbalance must be 'm_e,z,phase' (kg m, m, rad), got {text!r}") from None
+    return [(me, z, phase)]
+
+
+def cmd_rotor(args: argparse.Namespace) -> None:
+    rig, pid = load_rotor(args.rotor) if args.rotor is not None else (RotorRig.example(), RotorRig.example_controller())
+    if args.figure is not None:
+        if args.step == "sensitivity":
+            raise UsageError("--figure goes with campbell and unbalance (sensitivity prints a table)")
+        _needs("matplotlib", "plot", "--figure")
+        check_output(args.figure, "--figure", FIGURE_SUFFIXES, args.overwrite)
+    unbalance = _unbalance(args.unbalance) if args.step == "unbalance" else None
+    defaults = {"campbell": np.linspace(0.0, 6000.0, 61), "unbalance": np.linspace(10.0, 600.0, 120)}
+    speeds: np.ndarray = args.speeds if args.speeds is not None else defaults.get(args.step, np.zeros(1))
+    if speeds.size == 0 or not np.all(np.isfinite(speeds)):
+        raise UsageError(f"--speeds must be finite speeds in rad/s, got {args.speeds}")
+    _started(args)
+    meta = {"command": f"rotor {args.step}", "rotor": str(args.rotor or "RotorRig.example()")}
+    if args.step == "campbell":
+        _campbell(rig, pid, speeds, args, meta)
+    elif args.step == "sensitivity":
+        _sensitivity(rig, pid, args)
+    else:
+        _unbalance_run(rig, pid, speeds, unbalance, args, meta)
+
+
+def _campbell(rig: RotorRig, pid: Any, speeds: np.ndarray, args: argparse.Namespace, meta: dict) -> None:
+    result = campbell(rig, pid, speeds)
+    onset = "stable at every speed given" if result.onset_speed is None else (
+        f"UNSTABLE from {result.onset_speed:g} rad/s")  # fmt: skip
+    print(f"Campbell diagram, {speeds.size} speeds {speeds[0]:g}-{speeds[-1]:g} rad/s: {onset}")
+    print(f"{'speed (rad/s)':>14}  whirling modes below 200 Hz: frequency (Hz), damping ratio, whirl")
+    for i in np.unique(np.linspace(0, speeds.size - 1, min(5, speeds.size)).astype(int)):
+        shown = (result.whirl[i] != 0) & (result.damping[i] < 0.9) & (result.frequency[i] < 200.0)
+        rows = zip(result.frequency[i][shown], result.damping[i][shown], result.whirl[i][shown])
+        modes = sorted({(round(float(f), 1), round(float(d), 3), "F" if w > 0 else "B") for f, d, w in rows})
+        print(f"{speeds[i]:>14g}  " + ", ".join(f"{f} Hz {d} {w}" for f, d, w in modes))
+    if args.figure is not None:
+        _save_figure(result.plot(max_frequency=200.0).figure, args.figure, meta)
+
+
+def _sensitivity(rig: RotorRig, pid: Any, args: argparse.Namespace) -> None:
+    if args.speeds is not None:
+        rig = rig.at_speed(float(args.speeds[0]))
+    sphs = schroeder_multisine(f0=2.0, f_max=1000.0, rms=1e-6, fs=pid.fs)
+    measured = measure_sensitivity(rig, pid, sphs, periods=args.periods, seed=args.seed)
+    print(f"ISO 14839-3 sensitivity at {rig.rotor.speed:g} rad/s (test signal 1 um rms, 2-1000 Hz, "
+          f"{args.periods} periods): zones A/B, B/C, C/D at 3, 4, 5 (9.5, 12, 14 dB)")  # fmt: skip
+    print(measured.table())
+
+
+def _unbalance_run(rig: RotorRig, pid: Any, speeds: np.ndarray, unbalance: Any, args: argparse.Namespace,
+                   meta: dict) -> None:  # fmt: skip
+    result = unbalance_response(rig, pid, speeds, unbalance)
+    print(f"Unbalance {unbalance[0][0]:g} kg m at z = {unbalance[0][1]:g} m, {speeds.size} speeds "
+          f"{speeds[0]:g}-{speeds[-1]:g} rad/s; peaks of the probe amplitude:")  # fmt: skip
+    for name, speed, amplitude in result.peaks:
+        print(f"  {name}: {1e6 * amplitude:.2f} um at {speed:g} rad/s ({speed * 60 / (2 * np.pi):.0f} rev/min)")
+    if not result.peaks:
+        print("  none within the speeds given (no critical speed passed)")
+    if args.figure is not None:
+        _save_figure(result.plot()[0].figure, args.figure, meta)

@@ -1,0 +1,60 @@
+"""amb-fast rotor: its three steps on the example rotor and on a rotor file; bad files and options are one
+line with exit status 2."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import amb_fast as af
+from amb_fast.cli import main
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:  # noqa: ANN001
+    status = main(list(argv))
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_campbell_sensitivity_and_unbalance_of_the_example(capsys, tmp_path) -> None:  # noqa: ANN001
+    status, out, _ = run(capsys, "rotor", "campbell", "--speeds", "0:3000:4", "--figure", str(tmp_path / "c.png"))
+    assert status == 0 and "stable at every speed given" in out and (tmp_path / "c.png").stat().st_size > 0
+    expected = af.campbell(af.RotorRig.example(), af.RotorRig.example_controller(), [0.0])
+    whirling = (expected.whirl[0] != 0) & (expected.damping[0] < 0.9)
+    assert f"{min(np.round(expected.frequency[0][whirling], 1))} Hz" in out  # the parallel mode, 20.2 Hz
+    status, out, _ = run(capsys, "rotor", "sensitivity", "--periods", "4")
+    assert status == 0 and "A.x" in out and "zone" in out and out.count(" A\n") >= 4
+    status, out, _ = run(capsys, "rotor", "unbalance", "--speeds", "10:600:60", "--unbalance", "1e-4,0.1,0")
+    assert status == 0 and "A.x:" in out and "rev/min" in out
+
+
+def test_a_rotor_file_changes_the_rotor(capsys, tmp_path) -> None:  # noqa: ANN001
+    path = tmp_path / "rotor.toml"
+    path.write_text("[rotor]\nmass = 12.0\nbearings = [-0.25, 0.25]\n[axes]\namp_bandwidth = 2500.0\n"
+                    "[controller]\nkd = 12.0\n")  # fmt: skip
+    rig, pid = af.system._file.load_rotor(path)
+    assert rig.rotor.mass == 12.0 and rig.rotor.bearings == (-0.25, 0.25) and rig.axes[2].amp_bandwidth == 2500.0
+    assert pid.kd == 12.0 and pid.kp == af.RotorRig.example_controller().kp
+    status, out, _ = run(capsys, "rotor", "campbell", "--rotor", str(path), "--speeds", "0,1000")
+    assert status == 0 and "Campbell" in out
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [("[rotor]\nmas = 3.0\n", "unknown key 'mas' in [rotor]"), ("[wheel]\n", "unknown section [wheel]"),
+     ("[rotor]\npolar_inertia = 5.0\n", "polar_inertia must be within"), ("[rotor\n", "not valid TOML")],
+)  # fmt: skip
+def test_bad_rotor_files_are_one_line_errors(capsys, tmp_path, text: str, message: str) -> None:  # noqa: ANN001
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    status, _, err = run(capsys, "rotor", "campbell", "--rotor", str(path))
+    assert (
+        status == 2 and message in err and err.startswith("amb-fast: error: rotor file") and len(err.splitlines()) <= 2
+    )
+
+
+def test_bad_options(capsys) -> None:  # noqa: ANN001
+    status, _, err = run(capsys, "rotor", "unbalance", "--unbalance", "1e-4,0.1")
+    assert status == 2 and "--unbalance must be 'm_e,z,phase'" in err
+    status, _, err = run(capsys, "rotor", "sensitivity", "--figure", "s.png")
+    assert status == 2 and "--figure goes with campbell and unbalance" in err
