@@ -294,3 +294,17 @@ def test_unbalance_bad_input_names_the_value() -> None:
     unstable = af.RotorRig(replace(rig.rotor, process=((0.0, 3e5, -3e5, 0.0, 0.0),)), rig.axes)
     with pytest.raises(af.UnstableLoopError, match="at speed 100 rad/s"):
         af.unbalance_response(unstable, PID, [100.0], [(1e-4, 0.0, 0.0)])
+
+
+def test_campbell_batched_loops_are_the_loop_models() -> None:
+    """Without dead time the Campbell diagram discretises all speeds in one batched exponential; each speed's
+    loop equals loop_model's to rounding, and with a dead time it is loop_model's."""
+    from amb_fast.system import _campbell, _control
+
+    spec = _control.controller_matrix(PID, 4)
+    for rig in (af.RotorRig.example(), af.RotorRig(af.RotorRig.example().rotor, CHAIN)):
+        speeds = np.array([0.0, 1234.5, 6000.0])
+        stack = _campbell.loop_stack(rig, spec, speeds)
+        for M, W in zip(stack, speeds):
+            expected = _model.loop_model(rig.at_speed(W), spec).M
+            np.testing.assert_allclose(M, expected, rtol=0, atol=1e-12 * np.abs(expected).max())

@@ -12,12 +12,13 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import scipy.linalg
 from numpy.typing import ArrayLike
 
 from .._equality import ArrayRecord
 from .._validate import require
-from ._control import ControllerSpec, controller_matrix
-from ._model import System, loop_model, plant
+from ._control import ControllerMatrix, ControllerSpec, controller_matrix, controller_state_space
+from ._model import System, loop_model, plant, sensor_rows
 from ._rotor import RotorRig
 
 
@@ -101,31 +102,71 @@ def _forward_form(system: System, states: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _whirl(values: np.ndarray, vectors: np.ndarray, F: np.ndarray, D: np.ndarray) -> np.ndarray:
-    """+1 forward, -1 backward, 0 none, per eigenvector (columns).
+    """+1 forward, -1 backward, 0 none, per speed and eigenvector: ``values`` (speeds, n), ``vectors``
+    (speeds, n, n) with the eigenvectors in columns.
 
     A repeated pole (x and y alike: any rotor at standstill, the parallel mode at any speed) has no
     mode shape of its own, only a plane of them; within it the shapes of pure whirl are the eigenvectors
-    of the forward form relative to the amplitude (one forward, one backward), and those are used."""
+    of the forward form relative to the amplitude (one forward, one backward), and those are used: for the
+    2x2 pencil ``(Fg, Dg)`` their signs are those of its two eigenvalues, whose product is
+    ``det Fg / det Dg`` and whose sum is ``tr(Dg^-1 Fg)``."""
     FV, DV = F @ vectors, D @ vectors
-    measure = np.einsum("ij,ij->j", vectors.conj(), FV).real
-    amplitude = np.einsum("ij,ij->j", vectors.conj(), DV).real
-    total = np.einsum("ij,ij->j", vectors.conj(), vectors).real
+    measure = np.einsum("sij,sij->sj", vectors.conj(), FV).real
+    amplitude = np.einsum("sij,sij->sj", vectors.conj(), DV).real
+    total = np.einsum("sij,sij->sj", vectors.conj(), vectors).real
     # For Im s < 0 (the conjugate pole) the same orbit reads the other way round.
     turning = np.sign(np.angle(values))
     whirl = np.sign(np.round(measure / np.maximum(amplitude, 1e-300), 9)) * turning
-    order = np.argsort(values.real + 1e3 * values.imag, kind="stable")
-    close = np.abs(np.diff(values[order])) <= 1e-8 * np.maximum(1.0, np.abs(values[order][1:]))
-    for k in np.flatnonzero(close):  # repeated poles come in pairs (x and y)
-        group = order[k : k + 2]
-        V = vectors[:, group]
-        Dg, Fg = V.conj().T @ D @ V, V.conj().T @ F @ V
-        root = np.linalg.cholesky((Dg + Dg.conj().T) / 2 + 1e-300 * np.eye(2))
-        within = np.linalg.solve(root, np.linalg.solve(root, (Fg + Fg.conj().T) / 2).conj().T)
-        pure = np.sign(np.round(np.linalg.eigvalsh((within + within.conj().T) / 2), 9)) * turning[group[0]]
-        whirl[group] = np.sort(pure)[::-1]
+    order = np.argsort(values.real + 1e3 * values.imag, axis=1, kind="stable")
+    ordered = np.take_along_axis(values, order, axis=1)
+    close = np.abs(np.diff(ordered, axis=1)) <= 1e-8 * np.maximum(1.0, np.abs(ordered[:, 1:]))
+    speed, k = np.nonzero(close)  # repeated poles come in pairs (x and y)
+    if speed.size:
+        first, second = order[speed, k], order[speed, k + 1]
+        V = np.stack([vectors[speed, :, first], vectors[speed, :, second]], axis=-1)  # (pairs, n, 2)
+        Dg = np.einsum("pia,ij,pjb->pab", V.conj(), D, V)
+        Fg = np.einsum("pia,ij,pjb->pab", V.conj(), F, V)
+        Dg, Fg = (Dg + np.conj(np.swapaxes(Dg, 1, 2))) / 2, (Fg + np.conj(np.swapaxes(Fg, 1, 2))) / 2
+        det_d, det_f = np.linalg.det(Dg).real, np.linalg.det(Fg).real
+        det_d = np.where(det_d != 0, det_d, 1e-300)
+        size = np.abs(Fg).max(axis=(1, 2)) / np.maximum(np.abs(Dg).max(axis=(1, 2)), 1e-300)  # |eigenvalues|
+        mixed = det_f / det_d < -1e-9 * size**2  # one forward, one backward
+        trace = (Fg[:, 0, 0] * Dg[:, 1, 1] + Fg[:, 1, 1] * Dg[:, 0, 0] - Fg[:, 0, 1] * Dg[:, 1, 0]
+                 - Fg[:, 1, 0] * Dg[:, 0, 1]).real / det_d  # fmt: skip
+        same = np.where(np.abs(trace) > 1e-9 * size, np.sign(trace), 0.0)
+        hi = np.where(mixed, 1.0, same) * turning[speed, first]
+        lo = np.where(mixed, -1.0, same) * turning[speed, first]
+        whirl[speed, first], whirl[speed, second] = hi, lo
     moving = amplitude > 1e-9 * total  # rotor motion at the bearings
     oscillating = np.abs(np.angle(values)) > 1e-9
     return np.where(moving & oscillating, whirl, 0).astype(int)
+
+
+def loop_stack(rig: RotorRig, controller: ControllerMatrix, speeds: np.ndarray) -> np.ndarray:
+    """The closed loop's matrix at each speed, (speeds, n, n). The continuous plant is affine in the speed
+    (only the gyroscopic term moves), so without dead time the plants are discretised in one batched matrix
+    exponential and the loops closed in one batched product; with a dead time each speed's loop is
+    :func:`loop_model`'s."""
+    if any(axis.dead_time > 0 for axis in rig.axes):
+        return np.stack([loop_model(rig.at_speed(float(W)), controller).M for W in speeds])
+    A0, B, _ = plant(rig.at_speed(0.0))
+    A1 = plant(rig.at_speed(1.0))[0] - A0  # the gyroscopic rows per rad/s
+    n, m = B.shape
+    T = 1.0 / controller.fs
+    augmented = np.zeros((speeds.size, n + m, n + m))
+    augmented[:, :n, :n] = (A0 + speeds[:, None, None] * A1) * T
+    augmented[:, :n, n:] = B * T
+    E = scipy.linalg.expm(augmented)
+    Phi, Gu = E[:, :n, :n], E[:, :n, n + m // 2 :]
+    Ac, Bc, Cc, Dc = controller_state_space(controller)
+    S = sensor_rows(rig)
+    c = Ac.shape[0]
+    M = np.empty((speeds.size, n + c, n + c))
+    M[:, :n, :n] = Phi + Gu @ (Dc @ S)
+    M[:, :n, n:] = Gu @ Cc
+    M[:, n:, :n] = Bc @ S
+    M[:, n:, n:] = Ac
+    return M
 
 
 def campbell(rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike) -> Campbell:
@@ -140,22 +181,17 @@ def campbell(rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike) -> Ca
             "a 1-D array of finite speeds, rad/s")  # fmt: skip
     spec = controller_matrix(controller, 4)
     fs = spec.fs
-    zs, whirls = [], []
-    F = D = np.zeros((0, 0))
-    for speed in W:
-        system = rig.at_speed(float(speed))
-        M = loop_model(system, spec).M
-        if F.shape[0] != M.shape[0]:
-            F, D = _forward_form(system, M.shape[0])
-        values, vectors = np.linalg.eig(M)
-        order = np.argsort(np.abs(np.angle(values)), kind="stable")
-        values, vectors = values[order], vectors[:, order]
-        zs.append(values)
-        whirls.append(_whirl(values, vectors, F, D))
-    z = np.array(zs)
+    M = loop_stack(rig, spec, W)
+    F, D = _forward_form(rig, M.shape[1])
+    values, vectors = np.linalg.eig(M)
+    order = np.argsort(np.abs(np.angle(values)), axis=1, kind="stable")
+    values = np.take_along_axis(values, order, axis=1)
+    vectors = np.take_along_axis(vectors, order[:, None, :], axis=2)
+    whirl = _whirl(values, vectors, F, D)
+    z = values
     s = fs * np.log(z.astype(complex))
     frequency = np.abs(s.imag) / (2 * np.pi)
     damping = -s.real / np.maximum(np.abs(s), 1e-300)
     unstable = np.any(np.abs(z) >= 1.0, axis=1)
     onset = float(W[np.argmax(unstable)]) if unstable.any() else None
-    return Campbell(W, z, frequency, damping, np.array(whirls), onset, fs)
+    return Campbell(W, z, frequency, damping, whirl, onset, fs)
