@@ -89,6 +89,9 @@ def continuous_plant(params: RotorParams, axes: Sequence[af.Rig]) -> tuple[np.nd
     """
     if len(axes) != 4:
         raise ValueError(f"axes: expected 4 Rig (A.x, A.y, B.x, B.y), got {len(axes)}")
+    for name, axis in zip(AXES, axes):  # the reference is the linear, noise-free loop only
+        if axis.force_law != "linear":
+            raise ValueError(f"axes[{name}].force_law={axis.force_law!r}: the reference is linear only")
     names = ["x", "y", "tx", "ty", "vx", "vy", "wx", "wy"]
     for name, axis in zip(AXES, axes):
         names += [f"{name}.{s}" for s, on in (("i", axis.amp_bandwidth), ("i_f", axis.eddy_bandwidth),
