@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.signal import cont2discrete
 
 import amb_fast as af
@@ -123,11 +124,11 @@ def continuous_plant(params: RotorParams, axes: Sequence[af.Rig]) -> tuple[np.nd
             B[4:8, 4 + j] = -axis.kiy * push
         else:
             A[4:8, force_current] += -axis.kiy * push
-        if coil is not None:
+        if coil is not None and axis.amp_bandwidth is not None:
             w = 2 * np.pi * axis.amp_bandwidth
             A[coil, coil] = -w
             B[coil, 4 + j] = w
-        if f"{name}.i_f" in ix:
+        if f"{name}.i_f" in ix and axis.eddy_bandwidth is not None:
             w = 2 * np.pi * axis.eddy_bandwidth
             k = ix[f"{name}.i_f"]
             A[k, k] = -w
@@ -135,7 +136,7 @@ def continuous_plant(params: RotorParams, axes: Sequence[af.Rig]) -> tuple[np.nd
                 B[k, 4 + j] = w
             else:
                 A[k, coil] = w
-        if f"{name}.ys" in ix:
+        if f"{name}.ys" in ix and axis.sensor_bandwidth is not None:
             w = 2 * np.pi * axis.sensor_bandwidth
             k = ix[f"{name}.ys"]
             A[k, k] = -w
@@ -155,7 +156,7 @@ def _probe_rows(params: RotorParams, names: list[str]) -> np.ndarray:
     return P
 
 
-def _ss(controller: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _ss(controller: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """A controller entry's delay-free (A, B, C, D) from the public API."""
     A, B, C, D = controller.state_space() if isinstance(controller, af.PID) else controller.to_ss()
     return (np.asarray(A, float), np.asarray(B, float).reshape(-1), np.asarray(C, float).reshape(-1),
@@ -189,7 +190,9 @@ def _dead_times(axes: Sequence[af.Rig], T: float) -> tuple[list[int], list[float
     return whole, fraction
 
 
-def _pieces(A: np.ndarray, B: np.ndarray, T: float, fraction: list[float]) -> list[tuple[float, np.ndarray, np.ndarray]]:
+def _pieces(
+    A: np.ndarray, B: np.ndarray, T: float, fraction: list[float]
+) -> list[tuple[float, np.ndarray, np.ndarray]]:
     """The sample [0, T) cut where an axis' dead-time fraction switches its command; ZOH per piece."""
     n = A.shape[0]
     cuts = sorted({0.0, T, *[f for f in fraction if 0 < f < T]})
@@ -217,7 +220,7 @@ def simulate(
     P = _probe_rows(params, names)
     whole, fraction = _dead_times(axes, T)
     pieces = _pieces(A, B, T, fraction)
-    entries = []  # [row, column, A, B, C, D, state, delay queue]
+    entries: list[list[Any]] = []  # [row, column, A, B, C, D, state, delay queue]
     for i, j, ctrl in spec:
         Ac, Bc, Cc, Dc = _ss(ctrl)
         entries.append([i, j, Ac, Bc, Cc, Dc, np.zeros(Ac.shape[0]), deque([0.0] * ctrl.delay)])
@@ -346,7 +349,7 @@ def closed_loop(
 
 
 def receptance(
-    params: RotorParams, axes: Sequence[af.Rig], controller: Sequence[Sequence[Any]], freq_hz: np.ndarray
+    params: RotorParams, axes: Sequence[af.Rig], controller: Sequence[Sequence[Any]], freq_hz: ArrayLike
 ) -> np.ndarray:
     """Exact sampled-data ``Y F^-1`` (lines, 4, 4), m/N, at ``z = exp(j 2 pi f / fs)``.
 
@@ -403,3 +406,58 @@ def experiment(
         F[:, :, e] = Fe
         Y[:, :, e] = Pe @ R.T
     return bins * fs / L, F @ np.linalg.inv(Y)
+
+
+def bearing_matrices(params: RotorParams) -> tuple[np.ndarray, np.ndarray]:
+    """The rotor's mass ``Mb`` (kg) and gyroscopic ``Gb`` (kg, per rad/s of speed) matrices (4, 4) in
+    bearing-plane coordinates ``yb = Bm q`` (axes A.x, A.y, B.x, B.y): with forces Fb at the bearing
+    planes, ``Mb yb'' + W Gb yb' = Fb`` where ``Mb = Bm^-T M Bm^-1``, ``Gb = Bm^-T G Bm^-1``. Mass loading
+    not included (the known rotor only, as paper eq. 9)."""
+    Bm_inv = np.linalg.inv(_planes(params, "bearings"))
+    M, G = rotor_matrices(params)
+    return Bm_inv.T @ M @ Bm_inv, Bm_inv.T @ G @ Bm_inv
+
+
+def actual_coefficients(params: RotorParams, freq_hz: ArrayLike, H: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``K + j w C = H + w^2 Mb - j w W Gb`` per line: K (lines, 4, 4) N/m and C (lines, 4, 4) N s/m
+    from ``H = F Y^-1`` (lines, 4, 4) N/m in bearing-plane coordinates at ``freq_hz`` (Hz)."""
+    Mb, Gb = bearing_matrices(params)
+    w = 2 * np.pi * np.asarray(freq_hz, dtype=float)[:, None, None]
+    KC = H + w**2 * Mb - 1j * w * params.speed * Gb
+    return KC.real, KC.imag / w
+
+
+def loop_modes(
+    params: RotorParams, axes: Sequence[af.Rig], controller: Sequence[Sequence[Any]]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Eigenvalues z of the closed loop (as :func:`loop_eigenvalues`), their mode shapes at the bearing
+    planes (n, 4) complex (A.x, A.y, B.x, B.y, from the eigenvector's rotor coordinates), and the whirl
+    direction of each: +1 forward (same sense as the spin, x towards y), -1 backward, 0 for a real or
+    zero eigenvalue (no whirl; ``|sin arg z| <= 1e-8`` counts as real).
+
+    For the mode ``v z^k`` with ``arg z > 0`` the displacement at a bearing, ``X + j Y`` as a point in the
+    plane, is ``(X + jY)/2 z^k + (X - jY)*/2 z*^k``: forward when ``|X + jY| > |X - jY|`` summed (squared)
+    over both bearings; for ``arg z < 0`` (the conjugate mode) the other way round.
+    """
+    Ad = closed_loop(params, axes, controller, transducer=False)[0]
+    z, vectors = np.linalg.eig(Ad)
+    shapes, direction = whirl_direction(params, vectors[:4], np.angle(z), np.abs(z) > 1e-9)
+    return z, shapes, direction
+
+
+def whirl_direction(
+    params: RotorParams, q: np.ndarray, angle: np.ndarray, whirling: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Bearing-plane shapes (n, 4) and whirl directions (n,) (+1 forward, -1 backward, 0 none) of modes
+    with rotor coordinates ``q`` (4, n) (columns: eigenvectors' x, y, tx, ty) and ``angle`` (n,): the
+    eigenvalue's angle (``arg z`` for a discrete mode, ``Im s`` for a continuous one; only its sign and
+    whether it is within 1e-8 rad of 0 or pi, reported as no whirl). ``whirling``: (n,) bool, False
+    forces 0 (e.g. a zero eigenvalue)."""
+    shapes = (_planes(params, "bearings") @ q).T
+    X, Y = shapes[:, [0, 2]], shapes[:, [1, 3]]
+    spin = (np.abs(X + 1j * Y) ** 2 - np.abs(X - 1j * Y) ** 2).sum(axis=1)
+    angle = np.asarray(angle, dtype=float)
+    moving = np.abs(np.sin(angle)) > 1e-8  # within 1e-8 rad of 0 or pi: a real eigenvalue to rounding
+    if whirling is not None:
+        moving &= whirling
+    return shapes, np.where(moving, np.sign(spin * np.sign(angle)), 0).astype(int)

@@ -9,20 +9,24 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
+import amb_fast as af
 from rotor_reference import (
     HADAMARD,
     RotorParams,
+    actual_coefficients,
+    bearing_matrices,
     closed_loop,
     continuous_plant,
     diagonal,
     experiment,
     loop_eigenvalues,
+    loop_modes,
     receptance,
     rigid_body_map,
     simulate,
+    whirl_direction,
 )
-
-import amb_fast as af
 
 FS = 4000.0
 
@@ -173,6 +177,10 @@ def test_free_rotor_whirl_splits_as_the_characteristic_equation() -> None:
             X, Y = v[0] + a * v[3], v[1] - a * v[2]  # displacement at bearing A for e^{jwt}
             fwd, bwd = abs(X + 1j * Y), abs(X - 1j * Y)  # counter-clockwise (x -> y) and clockwise parts
             assert (bwd if sense > 0 else fwd) < 1e-9 * (fwd if sense > 0 else bwd)
+            # the classifier the loop's modes use agrees, for the mode and its conjugate
+            pair = np.column_stack([v[:4], v[:4].conj()])
+            _, direction = whirl_direction(rotor, pair, np.array([w, -w]))
+            np.testing.assert_array_equal(direction, [sense, sense])
 
 
 def test_hadamard_rows_and_rigid_body_map() -> None:
@@ -193,3 +201,38 @@ def test_bad_input_is_refused() -> None:
         receptance(spinning(), [chain()] * 4, [[pid()]], [10.0])
     with pytest.raises(ValueError, match="axes"):
         continuous_plant(spinning(), [chain()] * 3)
+
+
+def test_bearing_matrices_give_the_springs_back_from_the_plant() -> None:
+    # The free rotor on springs kyy at the bearings (no lags, no mass loading): the continuous dynamic
+    # stiffness in bearing coordinates is -w^2 Mb + j w W Gb + diag(kyy), so the actual coefficients of
+    # its inverse receptance are K = diag(kyy), C = 0.
+    rotor = spinning()
+    rotor.process = []
+    springs = [af.Rig(kyy=k) for k in (1e5, 2e5, 3e5, 4e5)]
+    A, B, _ = continuous_plant(rotor, springs)
+    Bm = np.array([[1, 0, 0, 0.2], [0, 1, -0.2, 0], [1, 0, 0, -0.18], [0, 1, 0.18, 0]])
+    freq = np.array([3.0, 30.0, 300.0])
+    H = np.array([np.linalg.inv(Bm @ np.linalg.solve(2j * np.pi * f * np.eye(8) - A, B[:, :4])[:4]) for f in freq])
+    K, C = actual_coefficients(rotor, freq, H)
+    np.testing.assert_allclose(K, np.broadcast_to(np.diag([1e5, 2e5, 3e5, 4e5]), K.shape), rtol=0, atol=1e-6)
+    np.testing.assert_allclose(C, 0, atol=1e-9)
+    Mb, Gb = bearing_matrices(rotor)
+    np.testing.assert_allclose(Mb, Mb.T, rtol=1e-14, atol=0)
+    np.testing.assert_allclose(Gb, -Gb.T, rtol=1e-14, atol=0)
+
+
+def test_loop_modes_of_an_isotropic_spinning_rotor_are_circular() -> None:
+    # Identical axes, a diagonal controller and no process: the loop is isotropic, so every mode whirls
+    # on a circle at each bearing (one of |X + jY|, |X - jY| is 0); conjugate modes have one direction.
+    rotor = RotorParams(mass=10.0, It=0.35, Ip=0.3, bearings=(0.2, -0.18), sensors=(0.23, -0.21), speed=600.0)
+    z, shapes, direction = loop_modes(rotor, [chain()] * 4, diagonal(pid()))
+    np.testing.assert_allclose(z, loop_eigenvalues(rotor, [chain()] * 4, diagonal(pid())), rtol=0, atol=1e-12)
+    moving = direction != 0
+    assert moving.sum() > 20 and set(direction[moving]) == {-1, 1}
+    X, Y = shapes[:, [0, 2]], shapes[:, [1, 3]]
+    ccw, cw = np.linalg.norm(X + 1j * Y, axis=1), np.linalg.norm(X - 1j * Y, axis=1)
+    assert (np.minimum(ccw, cw) / np.maximum(ccw, cw))[moving].max() < 1e-5
+    for k in np.flatnonzero(moving):
+        partner = np.argmin(np.abs(z - z[k].conj()))
+        assert direction[partner] == direction[k]
