@@ -21,7 +21,14 @@ except ImportError as error:  # pragma: no cover - only without a built extensio
         "from the project root (it compiles the C++ core), not by putting python/ on the path."
     ) from error
 
-from ._errors import NoExcitationError, TouchdownError, UnstableLoopError
+from ._errors import (
+    IdentificationWarning,
+    NoExcitationError,
+    NonPeriodicExcitationWarning,
+    TouchdownError,
+    UnstableLoopError,
+    WeakLinesWarning,
+)
 from ._excitation import Multisine, schroeder_multisine
 from ._experiment import Estimate, UnexcitedLines, identify, run_experiment
 from ._linear import (
@@ -111,7 +118,9 @@ __all__ = [
     "Estimate",
     "Estimate2",
     "Multisine",
+    "IdentificationWarning",
     "NoExcitationError",
+    "NonPeriodicExcitationWarning",
     "Recording",
     "Rig",
     "StabilityMargin",
@@ -121,6 +130,7 @@ __all__ = [
     "TwoAxisRig",
     "UnexcitedLines",
     "UnstableLoopError",
+    "WeakLinesWarning",
     "__version__",
     "closed_loop",
     "closed_loop_poles",

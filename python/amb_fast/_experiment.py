@@ -14,6 +14,7 @@ from numpy.typing import ArrayLike
 from . import _checks, _core
 from ._dispatch import axes_aware, recordings_aware
 from ._equality import ArrayRecord
+from ._errors import NonPeriodicExcitationWarning
 from ._excitation import Multisine, period_samples
 from ._linear import AnyController, core_controller, require_stable, settle_periods_for, settling_radius
 from ._params import Rig
@@ -137,18 +138,22 @@ class Estimate(ArrayRecord):
         return to_ross(self, n, smoothed=smoothed, **kwargs)
 
 
-def _plan(harmonics: np.ndarray, period: int) -> tuple[_core.LinePlan, np.ndarray]:
+def _plan(harmonics: np.ndarray, period: int, skip: np.ndarray | None = None) -> tuple[_core.LinePlan, np.ndarray]:
     """The core's plan for these excited harmonics, and the unexcited ones below the highest (read-only;
-    made once per distinct excitation)."""
-    return _cached_plan(np.asarray(harmonics, dtype=np.int64).tobytes(), int(period))
+    made once per distinct excitation). ``skip``: harmonics the force excites beyond the chosen ones, which
+    are neither estimated nor taken for noise."""
+    skip_bytes = b"" if skip is None else np.asarray(skip, dtype=np.int64).tobytes()
+    return _cached_plan(np.asarray(harmonics, dtype=np.int64).tobytes(), int(period), skip_bytes)
 
 
 @functools.lru_cache(maxsize=64)
-def _cached_plan(harmonics_bytes: bytes, period: int) -> tuple[_core.LinePlan, np.ndarray]:
+def _cached_plan(harmonics_bytes: bytes, period: int, skip_bytes: bytes = b"") -> tuple[_core.LinePlan, np.ndarray]:
     harmonics = np.frombuffer(harmonics_bytes, dtype=np.int64)
     gaps = np.ones(int(harmonics.max()) + 1, dtype=bool)
     gaps[0] = False
     gaps[harmonics] = False
+    skip = np.frombuffer(skip_bytes, dtype=np.int64)
+    gaps[skip[skip < gaps.size]] = False
     unexcited = np.flatnonzero(gaps)
     unexcited.flags.writeable = False
     return _core.LinePlan(period=period, excited=harmonics, unexcited=unexcited), unexcited
@@ -285,10 +290,12 @@ def run_experiment(
         warnings.warn(
             f"the amplifier saturated in {raw.saturated_samples} of {total} recorded samples: the estimate is "
             "flagged (Estimate.saturated) and is not that of the linear loop",
-            stacklevel=2,
+            stacklevel=3,
         )
     meta = {"source": "run_experiment", "rig": rig, "controller": pid, "seed": seed, "fs": excitation.fs,
             "f0": excitation.f0, "mass": rig.mass, "settle_periods": settle_periods}  # fmt: skip
+    # No periodicity or weak-line warnings here: the excitation is periodic by construction, the noise is the
+    # caller's choice, and Estimate.weak flags the lines as a sweep point's estimate does.
     return _estimate(raw, harmonics, unexcited, excitation.f0, saturated=int(raw.saturated_samples), meta=meta)
 
 
@@ -339,14 +346,19 @@ def identify(
         warnings.warn(
             f"recording is not a whole number of periods of {period} samples: dropped the last "
             f"{force.size - whole} samples",
-            stacklevel=2,
+            stacklevel=3,
         )
         force, displacement = force[:whole], displacement[:whole]
     require((whole - start) // period >= 2, "periods after settling", (whole - start) // period,
             ">= 2 (standard errors need at least two)")  # fmt: skip
     clearance = optional_positive("clearance", clearance, "m")
     harmonics = _lines(force[start:], period, f0, fs, f_max, lines, offset=start)
-    plan, unexcited = _plan(harmonics, period)
+    # A few periods' force spectra: the harmonics it excites beyond the chosen lines (lines= or f_max=), which
+    # are neither estimated nor noise, and whether it repeats with the period at all (a wrong fs or f0).
+    spectra = _checks.period_spectra(force[start:], period)
+    chosen = lines is not None or f_max is not None
+    others = np.setdiff1d(_checks.detect_lines(np.abs(spectra.mean(axis=0))), harmonics) if chosen else None
+    plan, unexcited = _plan(harmonics, period, skip=others)
     try:
         raw = _core.identify(force, displacement, settle_periods, plan, mass, fs, window)
     except ValueError:
@@ -358,10 +370,24 @@ def identify(
             raise _checks.NoExcitationError(f"force has no excitation at the chosen lines: it is zero or constant "
                                             f"there ({force[start]:g} N)") from None  # fmt: skip
         raise
-    force_noise = _checks.noise_levels(force[start:], period, harmonics, raw.unexcited_force)
-    _checks.require_excitation(raw.force, force_noise, offset=max(abs(force[start]), abs(force[-1])))
-    displacement_noise = _checks.noise_levels(displacement[start:], period, harmonics, raw.unexcited_displacement)
+    excited = harmonics if others is None else np.union1d(harmonics, others)
+    fraction = _checks.non_periodic_fraction(spectra, excited)
+    force_noise = _checks.noise_levels(force[start:], period, harmonics, raw.unexcited_force, skip=others)
+    try:
+        _checks.require_excitation(raw.force, force_noise, offset=max(abs(force[start]), abs(force[-1])))
+    except _checks.NoExcitationError as error:
+        if fraction > _checks.NON_PERIODIC:  # the likelier cause: say it in the error
+            message = _checks.non_periodic_message(fraction, fs, f0, period, spectra.shape[0])
+            raise _checks.NoExcitationError(f"{error}; also, {message}") from None
+        raise
+    if fraction > _checks.NON_PERIODIC:
+        message = _checks.non_periodic_message(fraction, fs, f0, period, spectra.shape[0])
+        warnings.warn(NonPeriodicExcitationWarning(message, fraction), stacklevel=3)
+    displacement_noise = _checks.noise_levels(
+        displacement[start:], period, harmonics, raw.unexcited_displacement, skip=others
+    )
     weak = _checks.weak_lines(raw.force, raw.displacement, force_noise, displacement_noise)
+    _checks.warn_mostly_weak(weak, _checks.floor(force_noise), _checks.floor(displacement_noise))
     _checks.warn_transient(displacement[start:], period)
     inertia = mass * (2 * np.pi * harmonics * fs / period) ** 2
     _checks.warn_implausible(raw.k, raw.H, displacement[max(start, whole - 16 * period) :], clearance,
