@@ -127,6 +127,19 @@ def period_spectra(signal: np.ndarray, period: int) -> np.ndarray:
     return np.fft.rfft(pick, axis=1)[:, 1 : top_harmonic(period) + 1] * (2.0 / period)
 
 
+def excited_harmonics(spectra: np.ndarray) -> np.ndarray:
+    """Harmonic numbers the sampled periods' spectra (:func:`period_spectra`) show excited: their average
+    above 1e-3 of the largest and WEAK times its own period-to-period scatter (the standard error of the
+    average). Unlike :func:`detect_lines`, it holds when most harmonics are excited."""
+    if spectra.shape[0] < 2 or spectra.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    level = np.abs(spectra.mean(axis=0))
+    if not level.max() > 0:
+        return np.zeros(0, dtype=np.int64)
+    scatter = np.std(spectra, axis=0, ddof=1) / np.sqrt(spectra.shape[0])
+    return np.flatnonzero((level > 1e-3 * level.max()) & (level > WEAK * scatter)) + 1
+
+
 def non_periodic_fraction(spectra: np.ndarray, excited: np.ndarray) -> float:
     """Share (0-1) of the force power, over the sampled periods and harmonics 1..top, that does not repeat
     at the excited harmonics: all of it between them, plus the period-to-period deviation on them (unbiased).

@@ -357,7 +357,7 @@ def identify(
     # are neither estimated nor noise, and whether it repeats with the period at all (a wrong fs or f0).
     spectra = _checks.period_spectra(force[start:], period)
     chosen = lines is not None or f_max is not None
-    others = np.setdiff1d(_checks.detect_lines(np.abs(spectra.mean(axis=0))), harmonics) if chosen else None
+    others = np.setdiff1d(_checks.excited_harmonics(spectra), harmonics) if chosen else None
     plan, unexcited = _plan(harmonics, period, skip=others)
     try:
         raw = _core.identify(force, displacement, settle_periods, plan, mass, fs, window)
