@@ -81,8 +81,9 @@ class Estimate(ArrayRecord):
     weak : ndarray of bool or None
         Per line: its force or displacement is under 10x the noise level, so noise weighs on it. The
         noise level is the median at the unexcited lines; :func:`identify` with every line excited uses
-        the harmonics above the band, or the period-to-period scatter. (``run_experiment`` with no
-        unexcited line: all False.)
+        the harmonics above the band that the force does not excite, or the period-to-period scatter.
+        (``run_experiment`` with no unexcited line: all False.) :func:`identify` warns
+        (:class:`WeakLinesWarning`) when more than half the lines are weak.
     meta : dict
         What produced it: ``source`` ("run_experiment" or "identify"), the rig, the controller, the seed,
         fs, f0, mass, settle_periods. Saved with the estimate (:meth:`save`).
@@ -322,13 +323,22 @@ def identify(
     Excited lines: ``lines`` (Hz, multiples of f0), else every harmonic of ``f0`` up to ``f_max``; with
     neither given, the harmonics whose period-averaged force amplitude exceeds 1e-3 of the largest and
     10x the median of all harmonics (so pass ``lines`` or ``f_max`` when over half of them are excited).
+    With ``lines`` or ``f_max``, exactly those lines are estimated; harmonics the force excites beyond them
+    (above 1e-3 of the largest and 10x their own period-to-period scatter) are neither estimated nor taken
+    for noise: ``Estimate.unexcited`` holds only the harmonics below the band that carry no excitation.
 
-    Refuses (``ValueError``) a force with no excitation at the chosen lines: zero, constant, or not
-    clearly (3x) above the noise floor at the unexcited lines. Flags lines under 10x that floor
-    (``Estimate.weak``). Warns (``UserWarning``) when the first recorded period differs from the last
-    beyond the period-to-period scatter (a start transient: pass ``settle_periods``), and for magnitudes
-    that suggest a unit mistake: a median stiffness outside 1e2-1e9 N/m, a displacement amplitude above
-    10 mm (or above ``clearance``, m, when given), force and displacement swapped.
+    Refuses (:class:`NoExcitationError`) a force with no excitation at the chosen lines: zero, constant, or
+    not clearly (3x) above the noise floor at the unexcited lines. Flags lines under 10x that floor
+    (``Estimate.weak``) and warns (:class:`WeakLinesWarning`) when more than half of them are. Warns
+    (:class:`NonPeriodicExcitationWarning`) when more than 15 % of the force power, in up to 16 periods
+    sampled, does not repeat at the excited lines (changes from period to period or falls between them): the
+    force is not periodic with ``fs/f0`` samples, most often because ``fs`` or ``f0`` is wrong (the
+    estimate's frequencies are then wrong too). A warning, not an error: the numbers are computed as asked,
+    and ``warnings.simplefilter("error", amb_fast.IdentificationWarning)`` makes every such check refuse.
+    Warns (:class:`IdentificationWarning`) when the first recorded period differs from the last beyond the
+    period-to-period scatter (a start transient: pass ``settle_periods``), and for magnitudes that suggest a
+    unit mistake: a median stiffness outside 1e2-1e9 N/m, a displacement amplitude above 10 mm (or above
+    ``clearance``, m, when given), force and displacement swapped.
     """
     force, displacement = series("force", force), series("displacement", displacement)
     require(force.size == displacement.size, "displacement length", displacement.size, f"{force.size} like force")
