@@ -176,3 +176,21 @@ def test_identify_warnings_are_identification_warnings_at_the_callers_line(paper
     for w in caught:
         assert issubclass(w.category, af.IdentificationWarning), w.message
         assert w.filename == __file__, (w.filename, w.message)
+
+
+# --- "natural frequency nan Hz": the library side ---------------------------------------------------------
+
+
+def test_natural_frequency_of_sparse_lines_and_of_a_band_without_resonance(paper) -> None:
+    from amb_fast.claims import natural_frequency
+
+    force, displacement = paper
+    every = af.identify(force, displacement, fs=FS, f0=F0, mass=MASS)
+    full = natural_frequency(every.freq, every.H)
+    assert 39.5 < full < 41.0  # the paper rig's, Hz
+    sparse = af.identify(force, displacement, fs=FS, f0=F0, mass=MASS, lines=[10.0, 40.0, 100.0])
+    # Lines 60 Hz apart: the bracketing pair alone (was a poorly conditioned one-point fit, then NaN).
+    assert abs(natural_frequency(sparse.freq, sparse.H) - full) < 0.5
+    # A band that ends below the resonance or starts above it has none: NaN, documented.
+    assert np.isnan(natural_frequency(every.freq[:30], every.H[:30]))
+    assert np.isnan(natural_frequency(every.freq[50:], every.H[50:]))
