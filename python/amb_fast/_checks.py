@@ -73,9 +73,9 @@ def noise_levels(
     """Levels of one channel that show its noise in the average of all its periods.
 
     The unexcited lines; with none, the harmonics above the band that the force does not excite (``skip``:
-    harmonics excited beyond the chosen lines); with none of those, the period-to-period scatter at the lines. The last two are measured on at most SAMPLE_PERIODS periods
-    (spread over the record) and scaled by sqrt(used / all), as noise averages down, so the check costs
-    a few periods, not a pass over the record.
+    harmonics excited beyond the chosen lines); with none of those, the period-to-period scatter at the
+    lines. The last two are measured on at most SAMPLE_PERIODS periods (spread over the record) and scaled
+    by sqrt(used / all), as noise averages down, so the check costs a few periods, not a pass over the record.
     """
     if unexcited.size:
         return unexcited
