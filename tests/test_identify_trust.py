@@ -194,3 +194,24 @@ def test_natural_frequency_of_sparse_lines_and_of_a_band_without_resonance(paper
     # A band that ends below the resonance or starts above it has none: NaN, documented.
     assert np.isnan(natural_frequency(every.freq[:30], every.H[:30]))
     assert np.isnan(natural_frequency(every.freq[50:], every.H[50:]))
+
+
+@pytest.mark.parametrize(("fs", "f0", "factor"), [(8000.0, 1.0, 2), (12000.0, 1.0, 3), (4000.0, 0.5, 2)])
+def test_a_period_a_whole_multiple_of_the_forces_warns(paper, fs, f0, factor) -> None:
+    # fs twice too large: the record is periodic with the (wrong) period too; only the even harmonics carry force.
+    force, displacement = paper
+    _, caught = identify_recording(force, displacement, fs=fs, f0=f0)
+    found = [w.message for w in caught if w.category is af.ShortPeriodWarning]
+    assert len(found) == 1 and found[0].factor == factor
+    assert f"it repeats every 4000 samples, 1/{factor} of fs/f0 = {4000 * factor} samples (fs = {fs:g} Hz" in str(
+        found[0]
+    )
+    assert not [w for w in caught if w.category is af.NonPeriodicExcitationWarning]
+
+
+def test_a_single_sine_with_a_longer_f0_does_not_warn() -> None:
+    # A stepped sine's one line at 40 Hz, analysed with f0 = 1 Hz: a single line is no sign of a wrong fs.
+    trace = af.simulate(af.Rig.paper(), af.PID.paper(), np.tile(np.sin(2 * np.pi * 40 * np.arange(4000) / FS), 20))
+    est, caught = identify_recording(trace.force[40000:], trace.displacement[40000:])
+    assert caught == []
+    assert abs(est.k[0] - 58.9e3) < 0.5e3

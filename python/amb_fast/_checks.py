@@ -17,7 +17,7 @@ import warnings
 
 import numpy as np
 
-from ._errors import IdentificationWarning, NoExcitationError, WeakLinesWarning
+from ._errors import IdentificationWarning, NoExcitationError, ShortPeriodWarning, WeakLinesWarning
 
 WEAK = 10.0  # a line is weak under this many times the unexcited level
 EXCITED = 3.0  # the excited lines as a whole must be this far above the unexcited level
@@ -167,6 +167,26 @@ def non_periodic_message(fraction: float, fs: float, f0: float, period: int, per
         f"between the excited lines (a periodic excitation: under {NON_PERIODIC:.0%}). The estimate is then "
         "biased by leakage and its frequencies are wrong if fs or f0 is: check fs (the recording's sample rate) "
         "and f0 (the excitation's line spacing, 1/period), and that the excitation repeats every period"
+    )
+
+
+def warn_short_period(excited: np.ndarray, fs: float, f0: float, period: int, stacklevel: int = 4) -> None:
+    """Warn (:class:`ShortPeriodWarning`) when the force excites 3 or more harmonics, all multiples of one
+    g >= 2 (a single sine, a stepped sine's line, is left alone)."""
+    if excited.size < 3:
+        return
+    factor = int(np.gcd.reduce(np.asarray(excited, dtype=np.int64)))
+    if factor < 2:
+        return
+    warnings.warn(
+        ShortPeriodWarning(
+            f"every harmonic the force excites ({excited.size} of them) is a multiple of {factor}: it repeats every "
+            f"{period // factor} samples, 1/{factor} of fs/f0 = {period} samples (fs = {fs:g} Hz, f0 = {f0:g} Hz). "
+            f"If fs is right, the excitation's f0 is {factor * f0:g} Hz and the estimate is right; if f0 is right, "
+            f"fs is {fs / factor:g} Hz and the estimate's frequencies are {factor}x too high: check fs",
+            factor,
+        ),
+        stacklevel=stacklevel,
     )
 
 

@@ -77,3 +77,21 @@ class WeakLinesWarning(IdentificationWarning):
         super().__init__(message)
         self.weak = weak
         self.lines = lines
+
+
+class ShortPeriodWarning(IdentificationWarning):
+    """Every harmonic the force excites is a multiple of some g >= 2: the force repeats every ``fs/f0/g``
+    samples, a g-th of the period given. Either ``f0`` is really g times larger (harmless: the estimate is
+    right, with unexcited lines in between) or ``fs`` is g times too large (the estimate's frequencies are
+    g times too high). A period that is too long by a whole factor cannot be seen otherwise: the force is
+    periodic with it.
+
+    Attributes
+    ----------
+    factor : int
+        g.
+    """
+
+    def __init__(self, message: str, factor: int) -> None:
+        super().__init__(message)
+        self.factor = factor

@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike
 from . import _checks, _core
 from ._dispatch import axes_aware, recordings_aware
 from ._equality import ArrayRecord
-from ._errors import NonPeriodicExcitationWarning
+from ._errors import IdentificationWarning, NonPeriodicExcitationWarning
 from ._excitation import Multisine, period_samples
 from ._linear import AnyController, core_controller, require_stable, settle_periods_for, settling_radius
 from ._params import Rig
@@ -335,6 +335,8 @@ def identify(
     force is not periodic with ``fs/f0`` samples, most often because ``fs`` or ``f0`` is wrong (the
     estimate's frequencies are then wrong too). A warning, not an error: the numbers are computed as asked,
     and ``warnings.simplefilter("error", amb_fast.IdentificationWarning)`` makes every such check refuse.
+    Warns (:class:`ShortPeriodWarning`) when the 3 or more harmonics the force excites are all multiples of
+    one g >= 2: it repeats every ``fs/f0/g`` samples, so either f0 is g times larger or fs g times smaller.
     Warns (:class:`IdentificationWarning`) when the first recorded period differs from the last beyond the
     period-to-period scatter (a start transient: pass ``settle_periods``), and for magnitudes that suggest a
     unit mistake: a median stiffness outside 1e2-1e9 N/m, a displacement amplitude above 10 mm (or above
@@ -356,6 +358,7 @@ def identify(
         warnings.warn(
             f"recording is not a whole number of periods of {period} samples: dropped the last "
             f"{force.size - whole} samples",
+            IdentificationWarning,
             stacklevel=3,
         )
         force, displacement = force[:whole], displacement[:whole]
@@ -393,6 +396,8 @@ def identify(
     if fraction > _checks.NON_PERIODIC:
         message = _checks.non_periodic_message(fraction, fs, f0, period, spectra.shape[0])
         warnings.warn(NonPeriodicExcitationWarning(message, fraction), stacklevel=3)
+    else:  # periodic, perhaps with a whole fraction of the period (fs too large by that factor)
+        _checks.warn_short_period(_checks.excited_harmonics(spectra), fs, f0, period)
     displacement_noise = _checks.noise_levels(
         displacement[start:], period, harmonics, raw.unexcited_displacement, skip=others
     )
