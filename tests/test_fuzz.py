@@ -117,7 +117,8 @@ def test_identify_on_arbitrary_recordings(periods, extra, f0, settle, bad, short
             return
     assert finite(est)
     assert bad is None and not shorter
-    assert all("dropped the last" in str(w.message) for w in caught)
+    # The displacement is noise: every line is weak, and identify says so.
+    assert all("dropped the last" in str(w.message) or w.category is af.WeakLinesWarning for w in caught)
 
 
 @fast

@@ -70,7 +70,7 @@ def test_eight_threads_give_the_serial_results(sphs) -> None:
     calls = {
         "simulate": lambda: af.simulate(rig, pid, force, seed=4).displacement,
         "run_experiment": lambda: af.run_experiment(rig, pid, sphs, seed=4, periods=4).H,
-        "identify": lambda: af.identify(force, 1e-5 * np.sin(np.arange(force.size)), fs=4000.0, f0=2.0, mass=0.92).H,
+        "identify": lambda: af.identify(force, 1e-5 * np.roll(force, 3), fs=4000.0, f0=2.0, mass=0.92).H,
         "sweep": lambda: af.sweep(rig, pid, sphs, kp=[2200.0, 2600.0], seed=4, periods=3, workers=1).H,
         "predict": lambda: af.predict(rig, pid, sphs.freq, kp=np.linspace(2000, 3000, 50)),
     }

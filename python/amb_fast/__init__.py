@@ -21,7 +21,15 @@ except ImportError as error:  # pragma: no cover - only without a built extensio
         "from the project root (it compiles the C++ core), not by putting python/ on the path."
     ) from error
 
-from ._errors import NoExcitationError, TouchdownError, UnstableLoopError
+from ._errors import (
+    IdentificationWarning,
+    NoExcitationError,
+    NonPeriodicExcitationWarning,
+    ShortPeriodWarning,
+    TouchdownError,
+    UnstableLoopError,
+    WeakLinesWarning,
+)
 from ._excitation import Multisine, schroeder_multisine
 from ._experiment import Estimate, UnexcitedLines, identify, run_experiment
 from ._linear import (
@@ -123,9 +131,12 @@ __all__ = [
     "Estimate",
     "Estimate2",
     "Multisine",
+    "IdentificationWarning",
     "NoExcitationError",
+    "NonPeriodicExcitationWarning",
     "Recording",
     "Rig",
+    "ShortPeriodWarning",
     "StabilityMargin",
     "SweepResult",
     "TouchdownError",
@@ -134,6 +145,7 @@ __all__ = [
     "UnbalanceResponse",
     "UnexcitedLines",
     "UnstableLoopError",
+    "WeakLinesWarning",
     "__version__",
     "closed_loop",
     "closed_loop_poles",

@@ -14,6 +14,7 @@ from numpy.typing import ArrayLike
 from . import _checks, _core
 from ._dispatch import axes_aware, recordings_aware
 from ._equality import ArrayRecord
+from ._errors import IdentificationWarning, NonPeriodicExcitationWarning
 from ._excitation import Multisine, period_samples
 from ._linear import AnyController, core_controller, require_stable, settle_periods_for, settling_radius
 from ._params import Rig
@@ -80,8 +81,9 @@ class Estimate(ArrayRecord):
     weak : ndarray of bool or None
         Per line: its force or displacement is under 10x the noise level, so noise weighs on it. The
         noise level is the median at the unexcited lines; :func:`identify` with every line excited uses
-        the harmonics above the band, or the period-to-period scatter. (``run_experiment`` with no
-        unexcited line: all False.)
+        the harmonics above the band that the force does not excite, or the period-to-period scatter.
+        (``run_experiment`` with no unexcited line: all False.) :func:`identify` warns
+        (:class:`WeakLinesWarning`) when more than half the lines are weak.
     meta : dict
         What produced it: ``source`` ("run_experiment" or "identify"), the rig, the controller, the seed,
         fs, f0, mass, settle_periods. Saved with the estimate (:meth:`save`).
@@ -137,18 +139,22 @@ class Estimate(ArrayRecord):
         return to_ross(self, n, smoothed=smoothed, **kwargs)
 
 
-def _plan(harmonics: np.ndarray, period: int) -> tuple[_core.LinePlan, np.ndarray]:
+def _plan(harmonics: np.ndarray, period: int, skip: np.ndarray | None = None) -> tuple[_core.LinePlan, np.ndarray]:
     """The core's plan for these excited harmonics, and the unexcited ones below the highest (read-only;
-    made once per distinct excitation)."""
-    return _cached_plan(np.asarray(harmonics, dtype=np.int64).tobytes(), int(period))
+    made once per distinct excitation). ``skip``: harmonics the force excites beyond the chosen ones, which
+    are neither estimated nor taken for noise."""
+    skip_bytes = b"" if skip is None else np.asarray(skip, dtype=np.int64).tobytes()
+    return _cached_plan(np.asarray(harmonics, dtype=np.int64).tobytes(), int(period), skip_bytes)
 
 
 @functools.lru_cache(maxsize=64)
-def _cached_plan(harmonics_bytes: bytes, period: int) -> tuple[_core.LinePlan, np.ndarray]:
+def _cached_plan(harmonics_bytes: bytes, period: int, skip_bytes: bytes = b"") -> tuple[_core.LinePlan, np.ndarray]:
     harmonics = np.frombuffer(harmonics_bytes, dtype=np.int64)
     gaps = np.ones(int(harmonics.max()) + 1, dtype=bool)
     gaps[0] = False
     gaps[harmonics] = False
+    skip = np.frombuffer(skip_bytes, dtype=np.int64)
+    gaps[skip[skip < gaps.size]] = False
     unexcited = np.flatnonzero(gaps)
     unexcited.flags.writeable = False
     return _core.LinePlan(period=period, excited=harmonics, unexcited=unexcited), unexcited
@@ -285,10 +291,12 @@ def run_experiment(
         warnings.warn(
             f"the amplifier saturated in {raw.saturated_samples} of {total} recorded samples: the estimate is "
             "flagged (Estimate.saturated) and is not that of the linear loop",
-            stacklevel=2,
+            stacklevel=3,
         )
     meta = {"source": "run_experiment", "rig": rig, "controller": pid, "seed": seed, "fs": excitation.fs,
             "f0": excitation.f0, "mass": rig.mass, "settle_periods": settle_periods}  # fmt: skip
+    # No periodicity or weak-line warnings here: the excitation is periodic by construction, the noise is the
+    # caller's choice, and Estimate.weak flags the lines as a sweep point's estimate does.
     return _estimate(raw, harmonics, unexcited, excitation.f0, saturated=int(raw.saturated_samples), meta=meta)
 
 
@@ -315,13 +323,24 @@ def identify(
     Excited lines: ``lines`` (Hz, multiples of f0), else every harmonic of ``f0`` up to ``f_max``; with
     neither given, the harmonics whose period-averaged force amplitude exceeds 1e-3 of the largest and
     10x the median of all harmonics (so pass ``lines`` or ``f_max`` when over half of them are excited).
+    With ``lines`` or ``f_max``, exactly those lines are estimated; harmonics the force excites beyond them
+    (above 1e-3 of the largest and 10x their own period-to-period scatter) are neither estimated nor taken
+    for noise: ``Estimate.unexcited`` holds only the harmonics below the band that carry no excitation.
 
-    Refuses (``ValueError``) a force with no excitation at the chosen lines: zero, constant, or not
-    clearly (3x) above the noise floor at the unexcited lines. Flags lines under 10x that floor
-    (``Estimate.weak``). Warns (``UserWarning``) when the first recorded period differs from the last
-    beyond the period-to-period scatter (a start transient: pass ``settle_periods``), and for magnitudes
-    that suggest a unit mistake: a median stiffness outside 1e2-1e9 N/m, a displacement amplitude above
-    10 mm (or above ``clearance``, m, when given), force and displacement swapped.
+    Refuses (:class:`NoExcitationError`) a force with no excitation at the chosen lines: zero, constant, or
+    not clearly (3x) above the noise floor at the unexcited lines. Flags lines under 10x that floor
+    (``Estimate.weak``) and warns (:class:`WeakLinesWarning`) when more than half of them are. Warns
+    (:class:`NonPeriodicExcitationWarning`) when more than 15 % of the force power, in up to 16 periods
+    sampled, does not repeat at the excited lines (changes from period to period or falls between them): the
+    force is not periodic with ``fs/f0`` samples, most often because ``fs`` or ``f0`` is wrong (the
+    estimate's frequencies are then wrong too). A warning, not an error: the numbers are computed as asked,
+    and ``warnings.simplefilter("error", amb_fast.IdentificationWarning)`` makes every such check refuse.
+    Warns (:class:`ShortPeriodWarning`) when the 3 or more harmonics the force excites are all multiples of
+    one g >= 2: it repeats every ``fs/f0/g`` samples, so either f0 is g times larger or fs g times smaller.
+    Warns (:class:`IdentificationWarning`) when the first recorded period differs from the last beyond the
+    period-to-period scatter (a start transient: pass ``settle_periods``), and for magnitudes that suggest a
+    unit mistake: a median stiffness outside 1e2-1e9 N/m, a displacement amplitude above 10 mm (or above
+    ``clearance``, m, when given), force and displacement swapped.
     """
     force, displacement = series("force", force), series("displacement", displacement)
     require(force.size == displacement.size, "displacement length", displacement.size, f"{force.size} like force")
@@ -339,14 +358,20 @@ def identify(
         warnings.warn(
             f"recording is not a whole number of periods of {period} samples: dropped the last "
             f"{force.size - whole} samples",
-            stacklevel=2,
+            IdentificationWarning,
+            stacklevel=3,
         )
         force, displacement = force[:whole], displacement[:whole]
     require((whole - start) // period >= 2, "periods after settling", (whole - start) // period,
             ">= 2 (standard errors need at least two)")  # fmt: skip
     clearance = optional_positive("clearance", clearance, "m")
     harmonics = _lines(force[start:], period, f0, fs, f_max, lines, offset=start)
-    plan, unexcited = _plan(harmonics, period)
+    # A few periods' force spectra: the harmonics it excites beyond the chosen lines (lines= or f_max=), which
+    # are neither estimated nor noise, and whether it repeats with the period at all (a wrong fs or f0).
+    spectra = _checks.period_spectra(force[start:], period)
+    chosen = lines is not None or f_max is not None
+    others = np.setdiff1d(_checks.excited_harmonics(spectra), harmonics) if chosen else None
+    plan, unexcited = _plan(harmonics, period, skip=others)
     try:
         raw = _core.identify(force, displacement, settle_periods, plan, mass, fs, window)
     except ValueError:
@@ -358,10 +383,26 @@ def identify(
             raise _checks.NoExcitationError(f"force has no excitation at the chosen lines: it is zero or constant "
                                             f"there ({force[start]:g} N)") from None  # fmt: skip
         raise
-    force_noise = _checks.noise_levels(force[start:], period, harmonics, raw.unexcited_force)
-    _checks.require_excitation(raw.force, force_noise, offset=max(abs(force[start]), abs(force[-1])))
-    displacement_noise = _checks.noise_levels(displacement[start:], period, harmonics, raw.unexcited_displacement)
+    excited = harmonics if others is None else np.union1d(harmonics, others)
+    fraction = _checks.non_periodic_fraction(spectra, excited)
+    force_noise = _checks.noise_levels(force[start:], period, harmonics, raw.unexcited_force, skip=others)
+    try:
+        _checks.require_excitation(raw.force, force_noise, offset=max(abs(force[start]), abs(force[-1])))
+    except _checks.NoExcitationError as error:
+        if fraction > _checks.NON_PERIODIC:  # the likelier cause: say it in the error
+            message = _checks.non_periodic_message(fraction, fs, f0, period, spectra.shape[0])
+            raise _checks.NoExcitationError(f"{error}; also, {message}") from None
+        raise
+    if fraction > _checks.NON_PERIODIC:
+        message = _checks.non_periodic_message(fraction, fs, f0, period, spectra.shape[0])
+        warnings.warn(NonPeriodicExcitationWarning(message, fraction), stacklevel=3)
+    else:  # periodic, perhaps with a whole fraction of the period (fs too large by that factor)
+        _checks.warn_short_period(_checks.excited_harmonics(spectra), fs, f0, period)
+    displacement_noise = _checks.noise_levels(
+        displacement[start:], period, harmonics, raw.unexcited_displacement, skip=others
+    )
     weak = _checks.weak_lines(raw.force, raw.displacement, force_noise, displacement_noise)
+    _checks.warn_mostly_weak(weak, _checks.floor(force_noise), _checks.floor(displacement_noise))
     _checks.warn_transient(displacement[start:], period)
     inertia = mass * (2 * np.pi * harmonics * fs / period) ** 2
     _checks.warn_implausible(raw.k, raw.H, displacement[max(start, whole - 16 * period) :], clearance,

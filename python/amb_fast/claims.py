@@ -45,17 +45,28 @@ def _fmt(values: np.ndarray, unit: str = "", digits: int = 4) -> str:
 def natural_frequency(freq: np.ndarray, H: np.ndarray, half_width: float = 5.0) -> float:
     """Undamped natural frequency (Hz) where Re(F/Y) = k(w) - m w^2 crosses zero (the quadrature point
     of modal testing). Near it k(w) is nearly constant, so Re(F/Y) is fitted as a - b w^2 by least
-    squares over the lines within ``half_width`` Hz of the first crossing, and w_n = sqrt(a / b). The
-    fit averages the noise of a dozen lines; it is tied to the stiffness, as the paper's reasoning
-    is, and far steadier than the peak of |Y/F| on a 1 Hz grid."""
+    squares over the lines within ``half_width`` Hz of the first crossing (and always the two lines that
+    bracket it, however far apart), and w_n = sqrt(a / b). The fit averages the noise of a dozen lines; it
+    is tied to the stiffness, as the paper's reasoning is, and far steadier than the peak of |Y/F| on a 1 Hz
+    grid.
+
+    Returns NaN when Re(F/Y) does not fall through zero over the lines: the band holds no resonance (it
+    ends below it or starts above it). Callers should say so ("outside the band"), not print the NaN.
+    """
     real = np.real(H)
     i = np.flatnonzero((real[:-1] > 0) & (real[1:] <= 0))
     if i.size == 0:
         return float("nan")
-    guess = freq[int(i[0])]
-    near = np.abs(freq - guess) <= half_width
-    slope, intercept = np.polyfit((2 * np.pi * freq[near]) ** 2, real[near], 1)
-    return float(np.sqrt(-intercept / slope) / (2 * np.pi))
+    first = int(i[0])
+    w2 = (2 * np.pi * np.asarray(freq, dtype=float)) ** 2
+    near = np.abs(freq - freq[first]) <= half_width
+    near[first : first + 2] = True  # sparse lines: the bracketing pair alone still gives a line
+    slope, intercept = np.polyfit(w2[near], real[near], 1)
+    ratio = -intercept / slope if slope != 0 else np.nan
+    if not (np.isfinite(ratio) and ratio > 0):  # a noisy fit: interpolate between the bracketing lines
+        a, b = real[first], real[first + 1]
+        ratio = w2[first] + (w2[first + 1] - w2[first]) * a / (a - b)
+    return float(np.sqrt(ratio) / (2 * np.pi))
 
 
 # --- Section 3.1 --------------------------------------------------------------------------------
