@@ -96,6 +96,9 @@ html_theme = "pydata_sphinx_theme"
 html_title = f"amb_fast {release}"
 html_theme_options = {
     "navigation_with_keys": False,
+    # The top bar: the pages' short H1 titles, the first few in the bar and the rest under "More", so
+    # the bar stays on one line at laptop widths (the long page titles wrapped it onto two).
+    "header_links_before_dropdown": 6,
     "show_toc_level": 2,
     "secondary_sidebar_items": ["page-toc", "sourcelink"],
     "footer_start": ["copyright"],
