@@ -96,10 +96,18 @@ html_theme = "pydata_sphinx_theme"
 html_title = f"amb_fast {release}"
 html_theme_options = {
     "navigation_with_keys": False,
+    # The top bar: the pages' short H1 titles, the first five in the bar and the rest under "More", so
+    # the bar stays on one line down to the theme's collapsed layout (long page titles wrapped it).
+    "header_links_before_dropdown": 5,
+    "navbar_persistent": ["search-button"],  # the search as an icon (Ctrl+K), not a wide field
     "show_toc_level": 2,
     "secondary_sidebar_items": ["page-toc", "sourcelink"],
     "footer_start": ["copyright"],
     "footer_end": ["sphinx-version"],
 }
+# The guide pages have no sub-pages, so the left sidebar would show an empty "Section Navigation": it is
+# left out on them (kept for the API reference and the gallery, which have sub-pages).
+_FLAT_PAGES = sorted(p.stem for p in Path(__file__).parent.glob("*.md"))
+html_sidebars: dict[str, list[str]] = {name: [] for name in _FLAT_PAGES}
 html_show_sourcelink = True
 html_static_path: list[str] = []
