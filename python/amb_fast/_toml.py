@@ -34,7 +34,7 @@ def read_table(path: str | os.PathLike[str], what: str) -> dict[str, Any]:
     where = f"{what} {str(file)!r}"
     suffix = file.suffix.lower()
     if suffix not in (".toml", ".json"):
-        raise ValueError(f"{where}: the name must end in .toml or .json, got {file.suffix or 'no suffix'!r}")
+        raise ValueError(f"{where}: path must end in .toml or .json, got {file.suffix or 'no suffix'!r}")
     if not file.is_file():
         raise ValueError(f"{where} does not exist" if not file.exists() else f"{where} is not a file")
     try:
