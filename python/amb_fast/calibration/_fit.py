@@ -207,7 +207,7 @@ def fit_rig(
 def _controllers(estimates: list[Estimate], controllers: ControllerArg | None) -> tuple[list[AnyController], list[str]]:
     """The controller of each estimate (given, or the one it records) and a line per estimate saying which
     controller and how many periods the fit uses, and where they come from."""
-    recorded = [recorded_controller(getattr(e, "meta", {}).get("controller")) for e in estimates]
+    recorded = [recorded_controller((getattr(e, "meta", None) or {}).get("controller")) for e in estimates]
     if controllers is None:
         missing = [i for i, c in enumerate(recorded) if c is None]
         if missing:
@@ -234,7 +234,7 @@ def _controllers(estimates: list[Estimate], controllers: ControllerArg | None) -
                     "leave controllers out to use the recorded ones, or give the controller of the measurement"
                 )
             source.append("given, the one the estimate records")
-    inputs = [f"estimates[{i}]: {c!r} ({s}); {int(e.blocks)} periods averaged"
+    inputs = [f"estimates[{i}]: {c!r} ({s}); {getattr(e, 'blocks', '?')} periods averaged"
               for i, (c, s, e) in enumerate(zip(ctrl_list, source, estimates))]  # fmt: skip
     return ctrl_list, inputs
 
