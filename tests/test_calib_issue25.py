@@ -12,9 +12,25 @@ import numpy as np
 import pytest
 
 import amb_fast as af
-from amb_fast._toml import load_rig, save_rig
 from amb_fast.cli import main
-from amb_fast.controllers import save_controller
+
+
+def load_rig(path: Path) -> af.Rig:
+    from amb_fast._toml import load_rig
+
+    return load_rig(path)
+
+
+def save_rig(rig: af.Rig, path: Path) -> Path:
+    from amb_fast._toml import save_rig
+
+    return save_rig(rig, path)
+
+
+def save_controller(controller: object, path: Path) -> Path:
+    from amb_fast.controllers import save_controller
+
+    return save_controller(controller, path)
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 PID_B = replace(af.PID.paper(), kp=3000.0, kd=2.2)  # the second gain set of the issue: --kp 3000 --kd 2.2
@@ -111,7 +127,8 @@ def test_design_below_the_start_s_sensitivity_peak_finds_a_feasible_start() -> N
     assert d.start_peak == pytest.approx(4.84, abs=0.01)
     assert np.isfinite(d.k_miss) and np.isfinite(d.c_miss)
     text = d.report()
-    assert "start controller's sensitivity peak 4.84" in text and "best feasible design" in text
+    assert re.search(r"start controller's sensitivity peak 4\.8\d+ is over the limit", text)
+    assert "best feasible design" in text
 
 
 def test_design_with_no_feasible_point_says_so_with_the_best_peak() -> None:
@@ -161,8 +178,8 @@ def test_pid_composes_like_any_controller() -> None:
     [
         af.PID.paper(),
         af.PID(kp=2000.0, ki=1e4, kd=2.0),  # no derivative filter, one sample of delay
-        af.PID.paper() * af.notch(700.0) * af.low_pass(1500.0, order=2) * af.lead_lag() * af.gain(1.5),
-        af.PID.paper() + af.notch(700.0),  # no named blocks: written as one transfer function
+        af.PID.paper().to_controller() * af.notch(700.0) * af.low_pass(1500.0, order=2) * af.lead_lag() * af.gain(1.5),
+        af.PID.paper().to_controller() + af.notch(700.0),  # no named blocks: written as one transfer function
         af.second_order(100.0, 200.0) * af.Controller.from_tf([0.5, 0.2], [1.0, -0.3], fs=4000.0),
     ],
 )
