@@ -46,9 +46,11 @@ from .controllers import (
     notch,
     parallel,
     pure_delay,
+    save_controller,
     second_order,
     series,
 )
+from ._toml import load_rig, save_rig
 from .io import Recording, load_estimate, load_recording, save_recording
 from .system import Campbell, EstimateN, RigidRotor, RotorRig, campbell
 from .two_axis import Estimate2, TwoAxisRig, plot_coefficients2
@@ -102,6 +104,9 @@ __all__ = [
     "gain",
     "lead_lag",
     "load_controller",
+    "load_rig",
+    "save_controller",
+    "save_rig",
     "low_pass",
     "notch",
     "parallel",
