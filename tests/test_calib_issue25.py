@@ -32,6 +32,7 @@ def save_controller(controller: object, path: Path) -> Path:
 
     return save_controller(controller, path)
 
+
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 PID_B = replace(af.PID.paper(), kp=3000.0, kd=2.2)  # the second gain set of the issue: --kp 3000 --kd 2.2
 FREE = ["kyy", "kiy", "amp_bandwidth", "mass_loading"]  # amb-fast fit's default
@@ -61,7 +62,9 @@ def test_fit_rig_takes_the_controllers_the_estimates_record(saved: tuple[Path, P
     given = af.fit_rig(estimates, af.Rig.paper(), [af.PID.paper().to_controller(), PID_B], free=FREE)
     assert given.values == pytest.approx(fit.values, rel=1e-9)
     # A controller that contradicts an estimate's record is an error naming both.
-    with pytest.raises(ValueError, match=r"controllers\[1\] is PID\(kp=2400.0.*estimates\[1\] was measured with PID\(kp=3000"):
+    with pytest.raises(
+        ValueError, match=r"controllers\[1\] is PID\(kp=2400.0.*estimates\[1\] was measured with PID\(kp=3000"
+    ):
         af.fit_rig(estimates, af.Rig.paper(), [af.PID.paper(), af.PID.paper()], free=FREE)
 
 
@@ -96,7 +99,10 @@ def test_cli_fit_uses_each_file_s_controller_and_periods(saved: tuple[Path, Path
     ],
 )
 def test_cli_fit_option_that_contradicts_a_file_is_an_error(
-    saved: tuple[Path, Path], capsys, options: list[str], expected: list[str]  # noqa: ANN001
+    saved: tuple[Path, Path],
+    capsys,
+    options: list[str],
+    expected: list[str],  # noqa: ANN001
 ) -> None:
     assert main(["fit", *map(str, saved), *options]) == 2
     err = capsys.readouterr().err.strip()

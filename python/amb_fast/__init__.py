@@ -37,6 +37,7 @@ from ._params import PID, Rig
 from ._simulate import Trace, simulate
 from ._sweep import sweep
 from ._sweep_result import SweepResult, load_sweep
+from ._toml import load_rig, save_rig
 from .controllers import (
     Controller,
     gain,
@@ -50,7 +51,6 @@ from .controllers import (
     second_order,
     series,
 )
-from ._toml import load_rig, save_rig
 from .io import Recording, load_estimate, load_recording, save_recording
 from .system import Campbell, EstimateN, RigidRotor, RotorRig, campbell
 from .two_axis import Estimate2, TwoAxisRig, plot_coefficients2

@@ -161,7 +161,9 @@ def load_rig(path: str | os.PathLike[str]) -> Rig:
     unknown = sorted(set(values) - known)
     if unknown:
         raise ValueError(f"{where}: unknown key(s) {', '.join(unknown)}; known: {', '.join(sorted(known))}")
-    changes = {k: None if isinstance(v, str) and v.lower() == "none" and k != "force_law" else v for k, v in values.items()}
+    changes: dict[str, Any] = {
+        k: None if isinstance(v, str) and v.lower() == "none" and k != "force_law" else v for k, v in values.items()
+    }
     try:
         return replace(Rig.paper(), **changes)
     except (ValueError, TypeError) as error:

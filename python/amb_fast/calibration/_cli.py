@@ -188,7 +188,9 @@ def _same_value(a: Any, b: Any) -> bool:
     return bool(np.isclose(float(a), float(b), rtol=1e-12, atol=0.0))
 
 
-def _fit_controllers(args: argparse.Namespace, estimates: list[Estimate], paths: list[Path]) -> tuple[list[Any], list[str]]:
+def _fit_controllers(
+    args: argparse.Namespace, estimates: list[Estimate], paths: list[Path]
+) -> tuple[list[Any], list[str]]:
     """The controller of each estimate file and where it comes from: the one the file records (an option
     or --controller that contradicts it is an error), else --controller or PID.paper() with the options."""
     options = _pid_options(args, len(estimates))
@@ -215,7 +217,8 @@ def _fit_controllers(args: argparse.Namespace, estimates: list[Estimate], paths:
                                  f"not a PID ({record!r}); leave {option} out")  # fmt: skip
             if not _same_value(value, getattr(record, name)):
                 raise ValueError(f"{option} {value:g} contradicts {str(path)!r}, which records {name} = "
-                                 f"{getattr(record, name)}; leave {option} out for a file that records its controller")  # fmt: skip
+                                 f"{getattr(record, name)}; leave {option} out for a file that records its "
+                                 "controller")  # fmt: skip
         out.append(record)
         notes.append("controller recorded in the file")
     return out, notes
@@ -235,7 +238,8 @@ def add_fit_parser(subparsers: Any, parents: Sequence[argparse.ArgumentParser] =
                      f"{', '.join(FITTABLE)})")  # fmt: skip
     fit.add_argument("--periods", type=int,
                      help="periods averaged in each estimate (its blocks) of a plain CSV table; a file saved by "
-                     f"`run --save` records them (default: the file's, {_PLAIN_PERIODS} for a plain table)")  # fmt: skip
+                     f"`run --save` records them (default: the file's, {_PLAIN_PERIODS} for a plain "
+                     "table)")  # fmt: skip
     fit.add_argument("--out", type=Path, help="write the fitted rig to a rig file (.toml; `design --rig`, "
                      "`run --rig`, amb_fast.load_rig read it)")  # fmt: skip
     _add_controller_options(fit, several=True)
@@ -317,8 +321,10 @@ def cmd_design(args: argparse.Namespace) -> None:
     print(actual.report())
     print("")
     gains = ", ".join(f"{n} = {v:.6g}" for n, v in naive.params.items())
-    print(f"for comparison, the naive design (effective coefficients on target): {gains}; its actual "
-          + naive.misses_text())
+    print(
+        f"for comparison, the naive design (effective coefficients on target): {gains}; its actual "
+        + naive.misses_text()
+    )
     if args.out is not None:
         actual.save(args.out)
         print(f"\nwrote the designed controller to {str(args.out)!r}")

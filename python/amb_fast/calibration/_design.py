@@ -145,8 +145,12 @@ class Design(ArrayRecord):
                 f"{self.unconstrained_residual:.4g}) is unstable or over the sensitivity limit; this is the best "
                 f"feasible design (objective {self.residual:.4g})"
             )
-        if self.feasible and np.isfinite(self.start_peak) and self.max_sensitivity is not None \
-                and self.start_peak > self.max_sensitivity:
+        if (
+            self.feasible
+            and np.isfinite(self.start_peak)
+            and self.max_sensitivity is not None
+            and self.start_peak > self.max_sensitivity
+        ):
             out.append(f"the start controller's sensitivity peak {self.start_peak:.3f} is over the limit: the design "
                        "started from a feasible point found by minimising the peak from it")  # fmt: skip
         if self.feasible and not self.constrained and self.residual > 1e-3:
@@ -406,8 +410,11 @@ def design_controller(
         start_peak=start_peak,
     )
     if not found:
-        reached = f"the lowest sensitivity peak reached is {design.peak_sensitivity:.3f}" if design.stable else \
-            "no stable design was reached"
+        reached = (
+            f"the lowest sensitivity peak reached is {design.peak_sensitivity:.3f}"
+            if design.stable
+            else "no stable design was reached"
+        )
         limit = "" if max_sensitivity is None else f" with |S| <= {max_sensitivity:g}"
         warnings.warn(f"design_controller: no values of {', '.join(names)} make the loop stable{limit}; {reached} "
                       "(Design.feasible is False)", UserWarning, stacklevel=3)  # fmt: skip

@@ -237,4 +237,3 @@ def _controllers(estimates: list[Estimate], controllers: ControllerArg | None) -
     inputs = [f"estimates[{i}]: {c!r} ({s}); {getattr(e, 'blocks', '?')} periods averaged"
               for i, (c, s, e) in enumerate(zip(ctrl_list, source, estimates))]  # fmt: skip
     return ctrl_list, inputs
-
