@@ -271,3 +271,12 @@ def test_the_full_controller_file_of_the_docs_is_stable_on_the_paper_rig(tmp_pat
     margin = af.stability_margin(af.Rig.paper(), c)
     assert margin.stable and margin.peak < 4.0
     assert np.max(np.abs(af.closed_loop_poles(af.Rig.paper(), c))) < 1.0
+
+
+def test_fit_without_degrees_of_freedom_prints_no_nan_and_no_misfit() -> None:
+    # Before: "chi2/dof = nan), p = nan" and "MISFIT", with a misfit warning, for a fit that cannot be tested.
+    one_line = af.run_experiment(af.Rig.paper(), af.PID.paper(), af.schroeder_multisine(f_max=1.0), seed=1)
+    fit = af.fit_rig(one_line, af.Rig.paper(), free=["kyy", "kiy"])
+    assert fit.dof == 0
+    text = fit.report()
+    assert "nan" not in text and "MISFIT" not in text and "not testable" in text

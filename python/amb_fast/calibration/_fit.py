@@ -194,7 +194,7 @@ def fit_rig(
         _lower=lower,
         _upper=upper,
     )
-    if not fit.fits:
+    if dof > 0 and not fit.fits:
         warnings.warn(
             f"the fitted model cannot fit the data: chi2 = {chi2:.1f} for {dof} degrees of freedom, "
             f"p = {p_value:.3g} < {MISFIT_P:g}; see RigFit.report()",

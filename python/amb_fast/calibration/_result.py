@@ -162,10 +162,15 @@ class RigFit(ArrayRecord):
             lo, hi = self.interval[n]
             out.append(f"{n:<20} {self.start[n]:12.6g} {self.values[n]:12.6g} {self.std[n]:10.3g} "
                        f"{f'[{lo:.6g}, {hi:.6g}]':>27}  {self.units[n]}")  # fmt: skip
-        ratio = self.chi2 / self.dof if self.dof > 0 else float("nan")
-        out += ["", f"goodness of fit     chi2 = {self.chi2:.1f} for {self.dof} degrees of freedom "
-                    f"(chi2/dof = {ratio:.3f}), p = {self.p_value:.3g}"]  # fmt: skip
-        if self.fits:
+        if self.dof <= 0:  # as many parameters as data: nothing left to test the model with (no NaN printed)
+            out += ["", f"goodness of fit     not testable: {2 * self.lines} values for {len(self.names)} free "
+                        "parameters leave no degrees of freedom"]  # fmt: skip
+        else:
+            out += ["", f"goodness of fit     chi2 = {self.chi2:.1f} for {self.dof} degrees of freedom "
+                        f"(chi2/dof = {self.chi2 / self.dof:.3f}), p = {self.p_value:.3g}"]  # fmt: skip
+        if self.dof <= 0:
+            pass
+        elif self.fits:
             out.append("                    the model is consistent with the data")
         else:
             out.append(
