@@ -156,6 +156,7 @@ def test_design_keeps_a_free_block_frequency_below_nyquist() -> None:
 def test_design_with_one_target_prints_no_nan(capsys) -> None:  # noqa: ANN001
     d = af.design_controller(af.Rig.paper(), af.PID.paper(), freq=BAND, stiffness=6e4)
     assert "nan" not in d.report().lower() and "damping" not in d.misses_text()
+    assert "nan" not in str(d).lower() and "stiffness misses by" in repr(d) and len(repr(d)) < 300
     assert main(["design", "--stiffness", "6e4"]) == 0
     assert "nan" not in capsys.readouterr().out.lower()
 

@@ -93,6 +93,15 @@ class Design(ArrayRecord):
     feasible: bool = True
     start_peak: float = float("nan")
 
+    def __repr__(self) -> str:
+        # A summary, not the arrays: the parameters, the misses of the targets set, the peak |S|.
+        params = ", ".join(f"{n}={v:.6g}" for n, v in self.params.items())
+        state = "feasible" if self.feasible else "NOT feasible"
+        return (
+            f"Design({params}; {self.misses_text()}; peak |S| {self.peak_sensitivity:.3f}, {state}; "
+            f"{self.freq.size} frequencies {self.freq.min():g}-{self.freq.max():g} Hz, basis {self.basis!r})"
+        )
+
     def misses_text(self) -> str:
         """How far the actual coefficients miss their targets (rms), for the targets the design has:
         ``"stiffness misses by 288.8 N/m rms"``; never a NaN for a target that is not set."""
