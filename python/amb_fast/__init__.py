@@ -45,6 +45,7 @@ from ._params import PID, Rig
 from ._simulate import Trace, simulate
 from ._sweep import sweep
 from ._sweep_result import SweepResult, load_sweep
+from ._toml import load_rig, save_rig
 from .controllers import (
     Controller,
     gain,
@@ -54,6 +55,7 @@ from .controllers import (
     notch,
     parallel,
     pure_delay,
+    save_controller,
     second_order,
     series,
 )
@@ -122,6 +124,9 @@ __all__ = [
     "gain",
     "lead_lag",
     "load_controller",
+    "load_rig",
+    "save_controller",
+    "save_rig",
     "low_pass",
     "notch",
     "parallel",

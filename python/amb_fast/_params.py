@@ -227,6 +227,31 @@ class PID:
 
         return pid_controller(self)
 
+    # A PID composes like any controller: as its Controller (``pid * notch``, ``notch * pid``, ``pid + c``,
+    # ``2.0 * pid``); the result is a Controller.
+    __array_ufunc__ = None  # numpy scalars defer to these operators
+
+    def __mul__(self, other: Any) -> Controller:
+        return self.to_controller().__mul__(other)
+
+    def __rmul__(self, other: Any) -> Controller:
+        return self.to_controller().__rmul__(other)
+
+    def __add__(self, other: Any) -> Controller:
+        return self.to_controller().__add__(other)
+
+    def __radd__(self, other: Any) -> Controller:
+        return self.to_controller().__radd__(other)
+
+    def __sub__(self, other: Any) -> Controller:
+        return self.to_controller().__sub__(other)
+
+    def __rsub__(self, other: Any) -> Controller:
+        return (-1.0 * self.to_controller()).__add__(other)
+
+    def __neg__(self) -> Controller:
+        return -1.0 * self.to_controller()
+
     def state_space(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The digital PID without its delay as ``(A, B, C, D)`` from e[k] (m) to u[k] (A).
 

@@ -15,28 +15,38 @@ from typing import Any
 import numpy as np
 
 from .._experiment import Estimate, UnexcitedLines
+from .._linear import AnyController
 from .._params import PID, Rig
+from .._toml import load_rig
+from ..controllers import load_controller, recorded_controller
 from ..io import load_estimate
-from ._problem import FITTABLE
+from ._problem import FITTABLE, same_controller
+
+_PLAIN_PERIODS = 10  # periods of a plain CSV table (which does not record them): `run`'s default
 
 _COLUMNS = ("freq_Hz", "H_real_N_per_m", "H_imag_N_per_m", "k_std_N_per_m", "c_std_Ns_per_m")
 _RIG_FIELDS = {f.name for f in fields(Rig)} - {"force_law"}
 
 
-def read_estimate(path: str | Path, *, blocks: int, mass: float) -> Estimate:
+def read_estimate(path: str | Path, *, blocks: int | None, mass: float) -> Estimate:
     """An estimate from a file that ``amb-fast run --save`` (or ``identify``) writes.
 
     A file written by :meth:`Estimate.save` (``.nc``, or ``.csv`` with its checksum line) is read whole
-    by :func:`amb_fast.load_estimate`. A plain CSV table with the columns of that file holds neither the
-    periods nor the known mass: ``blocks`` (the periods averaged, up to 63) and ``mass`` (kg) are given,
-    and force and displacement amplitudes are NaN.
+    by :func:`amb_fast.load_estimate`: it records its periods (and its controller), and ``blocks``, when
+    given, must agree (``--periods``). A plain CSV table with the columns of that file holds neither the
+    periods nor the known mass: ``blocks`` (the periods averaged, up to 63; default 10 as ``run``) and
+    ``mass`` (kg) are given, and force and displacement amplitudes are NaN.
     """
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"estimate file {str(path)!r} does not exist")
-    with path.open("rb") as head:
-        if path.suffix.lower() == ".nc" or head.read(10) == b"# sha256: ":
-            return load_estimate(path)
+    if _records(path):
+        estimate = load_estimate(path)
+        if blocks is not None and blocks != estimate.blocks:
+            raise ValueError(f"--periods {blocks} contradicts {str(path)!r}, which records {estimate.blocks} periods "
+                             "averaged; leave --periods out for a file that records them")  # fmt: skip
+        return estimate
+    blocks = _PLAIN_PERIODS if blocks is None else blocks
     try:
         table = np.genfromtxt(path, delimiter=",", names=True)
     except ValueError as error:
@@ -57,6 +67,12 @@ def read_estimate(path: str | Path, *, blocks: int, mass: float) -> Estimate:
         force=nan, displacement=nan, unexcited=UnexcitedLines(np.empty(0), np.empty(0), np.empty(0)),
         periods=blocks, blocks=blocks,
     )  # fmt: skip
+
+
+def _records(path: Path) -> bool:
+    """Whether an estimate file is one :meth:`Estimate.save` wrote (it records its periods and controller)."""
+    with path.open("rb") as head:
+        return path.suffix.lower() == ".nc" or head.read(10) == b"# sha256: "
 
 
 def _assignments(text: str) -> dict[str, Any]:
@@ -99,43 +115,113 @@ def _rig(args: argparse.Namespace) -> Rig:
         raise ValueError(f"--set: {sorted(unknown)} are not Rig fields ({', '.join(sorted(_RIG_FIELDS))})")
     if "substeps" in changes:
         changes["substeps"] = int(changes["substeps"])
-    return replace(Rig.paper(), **changes)
+    base = load_rig(args.rig) if args.rig is not None else Rig.paper()
+    return replace(base, **changes)
 
 
 def _add_controller_options(parser: argparse.ArgumentParser, several: bool) -> None:
-    group = parser.add_argument_group("controller (defaults: PID.paper())")
+    default = "the one each file records, else PID.paper()" if several else "PID.paper()"
+    group = parser.add_argument_group(f"controller (default: {default})")
     each = " (one per estimate file, 'a,b')" if several else ""
     for name, unit in (("kp", "A/m"), ("ki", "A/(m s)"), ("kd", "A s/m")):
         group.add_argument(f"--{name}", type=_list, help=f"{name} ({unit}){each}")
     group.add_argument("--derivative-cutoff", type=float, help="derivative filter corner (Hz)")
     group.add_argument("--fs", type=float, help="sampling frequency (Hz)")
     group.add_argument("--delay", type=int, help="computation delay (whole samples)")
+    group.add_argument("--controller", type=Path, action="append", metavar="FILE",
+                       help="any controller from a TOML or JSON file (docs/controllers.md) instead of the PID"
+                       + (" (once, or once per estimate file)" if several else ""))  # fmt: skip
+    parser.add_argument("--rig", type=Path, metavar="FILE",
+                        help="rig file (TOML or JSON, as `fit --out` writes) replacing Rig.paper(): the fixed values "
+                        "and the start values of the free ones")  # fmt: skip
     parser.add_argument(
         "--set",
         type=_assignments,
         metavar="NAME=X,...",
-        help="rig values (SI units, 'none' switches a stage off) replacing Rig.paper()'s: the fixed values and "
-        "the start values of the free ones, e.g. --set amp_bandwidth=2000,dead_time=1e-4",
+        help="rig values (SI units, 'none' switches a stage off) replacing those of Rig.paper() (or --rig): the fixed "
+        "values and the start values of the free ones, e.g. --set amp_bandwidth=2000,dead_time=1e-4",
     )
 
 
-def _controllers(args: argparse.Namespace, count: int) -> list[PID]:
-    base = PID.paper()
-    common: dict[str, Any] = {}
-    for name in ("derivative_cutoff", "fs", "delay"):
-        if getattr(args, name) is not None:
-            common[name] = getattr(args, name)
-    out = []
-    for i in range(count):
-        gains = {}
-        for name in ("kp", "ki", "kd"):
-            values = getattr(args, name)
-            if values:
-                if len(values) not in (1, count):
-                    raise ValueError(f"--{name} must give one value or one per estimate ({count}), got {len(values)}")
-                gains[name] = values[i if len(values) > 1 else 0]
-        out.append(replace(base, **common, **gains))
+_PID_FIELDS = ("kp", "ki", "kd", "derivative_cutoff", "fs", "delay")
+
+
+def _pid_options(args: argparse.Namespace, count: int) -> list[dict[str, Any]]:
+    """The PID options given, per estimate: ``[{field: value}, ...]`` (``--kp a,b`` one value per file)."""
+    out: list[dict[str, Any]] = [{} for _ in range(count)]
+    for name in _PID_FIELDS:
+        values = getattr(args, name)
+        if values is None:
+            continue
+        if not isinstance(values, list):
+            values = [values]
+        if len(values) not in (1, count):
+            raise ValueError(f"--{name} must give one value or one per estimate ({count}), got {len(values)}")
+        for i in range(count):
+            out[i][name] = values[i if len(values) > 1 else 0]
     return out
+
+
+def _controller_files(args: argparse.Namespace, count: int, options: list[dict[str, Any]]) -> list[Any]:
+    files = args.controller or []
+    if not files:
+        return [None] * count
+    if any(options):
+        given = ", ".join(sorted({"--" + n.replace("_", "-") for o in options for n in o}))
+        raise ValueError(f"{given} cannot go with --controller (the file sets the controller, its fs and delay)")
+    if len(files) not in (1, count):
+        raise ValueError(f"--controller must be given once or once per estimate file ({count}), got {len(files)}")
+    loaded = {str(f): load_controller(f) for f in files}
+    return [(f, loaded[str(f)]) for f in (files if len(files) == count else files * count)]
+
+
+def _controllers(args: argparse.Namespace, count: int) -> list[AnyController]:
+    """The controller of the ``design`` command: ``--controller FILE``, or PID.paper() with the options."""
+    options = _pid_options(args, count)
+    files = _controller_files(args, count, options)
+    return [file[1] if file is not None else replace(PID.paper(), **opts) for file, opts in zip(files, options)]
+
+
+def _same_value(a: Any, b: Any) -> bool:
+    if a is None or b is None:
+        return a is b
+    return bool(np.isclose(float(a), float(b), rtol=1e-12, atol=0.0))
+
+
+def _fit_controllers(
+    args: argparse.Namespace, estimates: list[Estimate], paths: list[Path]
+) -> tuple[list[Any], list[str]]:
+    """The controller of each estimate file and where it comes from: the one the file records (an option
+    or --controller that contradicts it is an error), else --controller or PID.paper() with the options."""
+    options = _pid_options(args, len(estimates))
+    files = _controller_files(args, len(estimates), options)
+    out, notes = [], []
+    for est, path, opts, file in zip(estimates, paths, options, files):
+        record = recorded_controller(est.meta.get("controller"))
+        if record is None:
+            if file is not None:
+                out.append(file[1])
+                notes.append(f"controller of --controller {str(file[0])!r} (the file records none)")
+            else:
+                out.append(replace(PID.paper(), **opts))
+                notes.append("PID.paper()" + (" with the options given" if opts else "")
+                             + " (the file records no controller)")  # fmt: skip
+            continue
+        if file is not None and not same_controller(file[1], record, np.asarray(est.freq, dtype=float)):
+            raise ValueError(f"--controller {str(file[0])!r} ({file[1]!r}) contradicts {str(path)!r}, which records "
+                             f"{record!r}; leave --controller out for a file that records its controller")  # fmt: skip
+        for name, value in opts.items():
+            option = "--" + name.replace("_", "-")
+            if not isinstance(record, PID):
+                raise ValueError(f"{option} {value:g} contradicts {str(path)!r}, which records a controller that is "
+                                 f"not a PID ({record!r}); leave {option} out")  # fmt: skip
+            if not _same_value(value, getattr(record, name)):
+                raise ValueError(f"{option} {value:g} contradicts {str(path)!r}, which records {name} = "
+                                 f"{getattr(record, name)}; leave {option} out for a file that records its "
+                                 "controller")  # fmt: skip
+        out.append(record)
+        notes.append("controller recorded in the file")
+    return out, notes
 
 
 def add_fit_parser(subparsers: Any, parents: Sequence[argparse.ArgumentParser] = ()) -> argparse.ArgumentParser:
@@ -150,21 +236,47 @@ def add_fit_parser(subparsers: Any, parents: Sequence[argparse.ArgumentParser] =
     fit.add_argument("--free", type=_names, default=["kyy", "kiy", "amp_bandwidth", "mass_loading"],
                      help=f"rig fields to fit, 'a,b' (default kyy,kiy,amp_bandwidth,mass_loading; any of "
                      f"{', '.join(FITTABLE)})")  # fmt: skip
-    fit.add_argument("--periods", type=int, default=10,
-                     help="periods averaged in each estimate (its blocks; default 10 as `run`)")  # fmt: skip
+    fit.add_argument("--periods", type=int,
+                     help="periods averaged in each estimate (its blocks) of a plain CSV table; a file saved by "
+                     f"`run --save` records them (default: the file's, {_PLAIN_PERIODS} for a plain "
+                     "table)")  # fmt: skip
+    fit.add_argument("--out", type=Path, help="write the fitted rig to a rig file (.toml; `design --rig`, "
+                     "`run --rig`, amb_fast.load_rig read it)")  # fmt: skip
     _add_controller_options(fit, several=True)
     fit.set_defaults(func=cmd_fit)
     return fit
 
 
 def cmd_fit(args: argparse.Namespace) -> None:
+    if args.out is not None:
+        _check_output(args.out, args.overwrite)
+    if args.periods is not None and args.periods < 4:
+        raise ValueError(f"--periods must be >= 4 (standard errors need several periods), got {args.periods}")
     rig = _rig(args)
-    estimates = [read_estimate(p, blocks=args.periods, mass=rig.mass) for p in args.estimates]
-    controllers = _controllers(args, len(estimates))
+    paths = list(args.estimates)
+    estimates = [read_estimate(p, blocks=args.periods, mass=rig.mass) for p in paths]
+    controllers, notes = _fit_controllers(args, estimates, paths)
     from ._fit import fit_rig  # scipy.optimize and scipy.stats: only for this command
 
+    args.phase = "run"  # the options and files are checked: a failure from here is not a usage error
     result = fit_rig(estimates, rig, controllers, free=args.free)
+    for i, (path, est, note) in enumerate(zip(paths, estimates, notes)):
+        periods = "recorded in the file" if _records(path) else "--periods" if args.periods else "the default"
+        print(f"estimates[{i}] = {str(path)!r}: {note}; {est.blocks} periods averaged ({periods})")
+    print("")
     print(result.report())
+    if args.out is not None:
+        result.save(args.out)
+        print(f"\nwrote the fitted rig to {str(args.out)!r}")
+
+
+def _check_output(path: Path, overwrite: bool) -> None:
+    if path.suffix.lower() != ".toml":
+        raise ValueError(f"--out must end in .toml, got {str(path)!r}")
+    if not (path.parent if str(path.parent) else Path(".")).is_dir():
+        raise ValueError(f"--out: the directory {str(path.parent)!r} does not exist")
+    if path.exists() and not overwrite:
+        raise ValueError(f"--out: {str(path)!r} exists; pass --overwrite to replace it")
 
 
 def add_design_parser(subparsers: Any, parents: Sequence[argparse.ArgumentParser] = ()) -> argparse.ArgumentParser:
@@ -181,12 +293,16 @@ def add_design_parser(subparsers: Any, parents: Sequence[argparse.ArgumentParser
     design.add_argument("--step", type=float, default=1.0, help="frequency step in the band (Hz; default 1)")
     design.add_argument("--free", type=_names, default=["kp", "kd"], help="parameters to choose (default kp,kd)")
     design.add_argument("--max-sensitivity", type=float, help="limit of the sensitivity peak |S| (e.g. 3: zone A)")
+    design.add_argument("--out", type=Path, help="write the designed controller to a controller file (.toml; "
+                        "`run --controller`, amb_fast.load_controller read it)")  # fmt: skip
     _add_controller_options(design, several=False)
     design.set_defaults(func=cmd_design)
     return design
 
 
 def cmd_design(args: argparse.Namespace) -> None:
+    if args.out is not None:
+        _check_output(args.out, args.overwrite)
     if args.stiffness is None and args.damping is None:
         raise ValueError("give --stiffness and/or --damping")
     low, high = args.band
@@ -199,10 +315,16 @@ def cmd_design(args: argparse.Namespace) -> None:
                                   max_sensitivity=args.max_sensitivity)  # fmt: skip
     from ._design import design_controller  # scipy.optimize: only for this command
 
+    args.phase = "run"
     actual = design_controller(rig, controller, **kwargs)
     naive = design_controller(rig, controller, **kwargs, basis="effective")
     print(actual.report())
     print("")
     gains = ", ".join(f"{n} = {v:.6g}" for n, v in naive.params.items())
-    print(f"for comparison, the naive design (effective coefficients on target): {gains}; its actual stiffness "
-          f"misses by {naive.k_miss:.4g} N/m rms and its damping by {naive.c_miss:.4g} N s/m rms")  # fmt: skip
+    print(
+        f"for comparison, the naive design (effective coefficients on target): {gains}; its actual "
+        + naive.misses_text()
+    )
+    if args.out is not None:
+        actual.save(args.out)
+        print(f"\nwrote the designed controller to {str(args.out)!r}")

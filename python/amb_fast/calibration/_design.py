@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import os
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
@@ -25,6 +28,7 @@ from .._linear import (
 from .._params import PID, Rig
 from .._sweep import RIG_FIELDS, point_model
 from .._sweep_result import unit_of
+from ..controllers import save_controller
 
 GAINS = ("kp", "ki", "kd")
 _GRID_POINTS = 1500  # sensitivity grid of the constraint during the search (the result is checked on 20000)
@@ -86,6 +90,31 @@ class Design(ArrayRecord):
     exact: bool
     basis: str
     max_sensitivity: float | None = None
+    feasible: bool = True
+    start_peak: float = float("nan")
+
+    def __repr__(self) -> str:
+        # A summary, not the arrays: the parameters, the misses of the targets set, the peak |S|.
+        params = ", ".join(f"{n}={v:.6g}" for n, v in self.params.items())
+        state = "feasible" if self.feasible else "NOT feasible"
+        return (
+            f"Design({params}; {self.misses_text()}; peak |S| {self.peak_sensitivity:.3f}, {state}; "
+            f"{self.freq.size} frequencies {self.freq.min():g}-{self.freq.max():g} Hz, basis {self.basis!r})"
+        )
+
+    def misses_text(self) -> str:
+        """How far the actual coefficients miss their targets (rms), for the targets the design has:
+        ``"stiffness misses by 288.8 N/m rms"``; never a NaN for a target that is not set."""
+        parts = [f"{name} misses by {miss:.4g} {unit} rms"
+                 for name, miss, target, unit in (("stiffness", self.k_miss, self.k_target, "N/m"),
+                                                  ("damping", self.c_miss, self.c_target, "N s/m"))
+                 if target is not None]  # fmt: skip
+        return " and ".join(parts)
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the designed controller to a TOML controller file that :func:`amb_fast.load_controller`
+        (and ``amb-fast run --controller``) reads back to the same response."""
+        return save_controller(self.controller, path)
 
     def report(self) -> str:
         """Parameters (start and designed), the targets against the actual and effective coefficients at a
@@ -113,13 +142,27 @@ class Design(ArrayRecord):
         zone = iso_zone(self.peak_sensitivity) if self.stable else "unstable"
         limit = f" (limit {self.max_sensitivity:g})" if self.max_sensitivity is not None else ""
         out.append(f"sensitivity peak |S| = {self.peak_sensitivity:.3f}{limit}, ISO 14839-3 zone {zone}")
-        if self.constrained:
+        if not self.feasible:
+            what = "stable" if self.max_sensitivity is None else f"stable with |S| <= {self.max_sensitivity:g}"
+            reached = (f"the lowest sensitivity peak reached is {self.peak_sensitivity:.3f}" if self.stable
+                       else "no stable design was reached")  # fmt: skip
+            out.append(f"NO FEASIBLE DESIGN: no values of {', '.join(self.params)} found that make the loop {what}; "
+                       f"{reached} (this design); free more parameters or relax the limit")  # fmt: skip
+        elif self.constrained:
             out.append(
                 "the targets are not feasible: the unconstrained optimum (objective "
                 f"{self.unconstrained_residual:.4g}) is unstable or over the sensitivity limit; this is the best "
                 f"feasible design (objective {self.residual:.4g})"
             )
-        elif self.residual > 1e-3:
+        if (
+            self.feasible
+            and np.isfinite(self.start_peak)
+            and self.max_sensitivity is not None
+            and self.start_peak > self.max_sensitivity
+        ):
+            out.append(f"the start controller's sensitivity peak {self.start_peak:.3f} is over the limit: the design "
+                       "started from a feasible point found by minimising the peak from it")  # fmt: skip
+        if self.feasible and not self.constrained and self.residual > 1e-3:
             out.append("the targets cannot be met exactly by these parameters: best fit, objective "
                        f"{self.residual:.4g} (rms weighted relative miss)")  # fmt: skip
         return "\n".join(out)
@@ -259,6 +302,12 @@ def design_controller(
             scale[i] = _zero_scale(n, start, w)
             x0[i] = 0.0
 
+    # A block's frequency (notch_freq, low_pass_freq, lead_lag_zero, ...) must stay below the Nyquist
+    # frequency (the block is prewarped there): the search keeps it inside that range.
+    lower = np.full(len(names), -np.inf)
+    upper = np.array([np.log(_NYQUIST_FRACTION * controller.fs / 2) if lg and _is_frequency(n) else np.inf
+                      for n, lg in zip(names, logs)])  # fmt: skip
+
     def values(x: np.ndarray) -> dict[str, float]:
         return {n: float(np.exp(v) if lg else v * s) for n, v, lg, s in zip(names, x, logs, scale)}
 
@@ -295,41 +344,46 @@ def design_controller(
     if exact:
         x_star = x0 + np.linalg.lstsq(M, -r0, rcond=None)[0]
     else:
-        x_star = optimize.least_squares(residuals, x0, method="trf", xtol=1e-12, ftol=1e-12).x
+        x_star = optimize.least_squares(residuals, x0, method="trf", bounds=(lower, upper), xtol=1e-12, ftol=1e-12).x
 
     def radius(x: np.ndarray) -> float:
-        return float(np.max(np.abs(closed_loop_poles(*model(x)))))
+        return float(np.max(np.abs(closed_loop_poles(*model(x))), initial=0.0))
 
     grid = np.geomspace(0.01, controller.fs / 2 * (1 - 1e-9), _GRID_POINTS)
 
     def peak(x: np.ndarray) -> float:
         return float(np.max(np.abs(sensitivity(*model(x), grid))))
 
-    def feasible(x: np.ndarray) -> bool:
-        if radius(x) >= 1.0 - 1e-9:
+    def feasible(x: np.ndarray, margin: float = 0.0) -> bool:
+        if np.any(x > upper) or radius(x) >= 1.0 - 1e-9:
             return False
-        return max_sensitivity is None or peak(x) <= max_sensitivity
+        return max_sensitivity is None or peak(x) <= max_sensitivity * (1.0 - margin)
 
-    x_best, constrained = x_star, False
+    x_best, constrained, found = x_star, False, True
+    start_peak = peak(x0) if radius(x0) < 1.0 else float("inf")
     if not feasible(x_star):
         constrained = True
         if not feasible(x0):
-            raise ValueError(
-                "controller: the targets' optimum is unstable or over max_sensitivity and so is the start "
-                "controller; start from a stable controller within the limit"
-            )
-        lo, hi = 0.0, 1.0  # the furthest feasible point on the segment from the start to the optimum
-        for _ in range(40):
-            mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if feasible(x0 + mid * (x_star - x0)) else (lo, mid)
-        x_best = x0 + lo * (x_star - x0)
-        constraints = [{"type": "ineq", "fun": lambda x: 1.0 - 1e-6 - radius(x)}]
-        if max_sensitivity is not None:
-            constraints.append({"type": "ineq", "fun": lambda x: max_sensitivity - peak(x)})
-        result = optimize.minimize(lambda x: float(np.sum(residuals(x) ** 2)), x_best, method="SLSQP",
-                                   constraints=constraints, options={"maxiter": 200, "ftol": 1e-12})  # fmt: skip
-        if np.all(np.isfinite(result.x)) and feasible(result.x) and objective(result.x) < objective(x_best):
-            x_best = result.x
+            # The usual reason: a limit below the start's peak. Phase 1: the nearest feasible point from
+            # the start (the peak minimised); without one, the design of lowest peak, said so.
+            x0, found = _feasible_start(x0, x_star, radius, peak, max_sensitivity, lower, upper)
+        if found:
+            lo, hi = 0.0, 1.0  # the furthest feasible point on the segment from the start to the optimum
+            for _ in range(40):
+                mid = 0.5 * (lo + hi)
+                lo, hi = (mid, hi) if feasible(x0 + mid * (x_star - x0)) else (lo, mid)
+            x_best = x0 + lo * (x_star - x0)
+            constraints = [{"type": "ineq", "fun": lambda x: 1.0 - 1e-6 - radius(x)}]
+            if max_sensitivity is not None:
+                constraints.append({"type": "ineq", "fun": lambda x: max_sensitivity - peak(x)})
+            box = [(None if np.isinf(a) else a, None if np.isinf(b) else b) for a, b in zip(lower, upper)]
+            result = optimize.minimize(lambda x: float(np.sum(residuals(x) ** 2)), x_best, method="SLSQP",
+                                       bounds=box, constraints=constraints,
+                                       options={"maxiter": 200, "ftol": 1e-12})  # fmt: skip
+            if np.all(np.isfinite(result.x)) and feasible(result.x) and objective(result.x) < objective(x_best):
+                x_best = result.x
+        else:
+            x_best = x0
 
     r_model, designed = model(x_best)
     k, c = coefficients(x_best)
@@ -340,7 +394,7 @@ def design_controller(
     margin = stability_margin(r_model, designed)
     if max_sensitivity is not None and margin.peak > max_sensitivity * (1 + 1e-3):
         constrained = True
-    return Design(
+    design = Design(
         controller=designed,
         params=values(x_best),
         start=start,
@@ -361,7 +415,19 @@ def design_controller(
         exact=exact,
         basis=basis,
         max_sensitivity=max_sensitivity,
+        feasible=found,
+        start_peak=start_peak,
     )
+    if not found:
+        reached = (
+            f"the lowest sensitivity peak reached is {design.peak_sensitivity:.3f}"
+            if design.stable
+            else "no stable design was reached"
+        )
+        limit = "" if max_sensitivity is None else f" with |S| <= {max_sensitivity:g}"
+        warnings.warn(f"design_controller: no values of {', '.join(names)} make the loop stable{limit}; {reached} "
+                      "(Design.feasible is False)", UserWarning, stacklevel=3)  # fmt: skip
+    return design
 
 
 def _zero_scale(name: str, start: dict[str, float], w: np.ndarray) -> float:
@@ -369,3 +435,55 @@ def _zero_scale(name: str, start: dict[str, float], w: np.ndarray) -> float:
     kp = abs(start.get("kp", 0.0)) or 1000.0
     wm = float(np.sqrt(w.min() * w.max()))
     return {"kp": kp, "ki": kp * wm, "kd": kp / wm}.get(name, 1.0)
+
+
+_NYQUIST_FRACTION = 0.999  # a block frequency's upper limit, as a fraction of fs/2
+
+
+def _is_frequency(name: str) -> bool:
+    """A block's frequency parameter (Hz), prewarped and so below the Nyquist frequency."""
+    return name.endswith(("_freq", "_zero", "_pole"))
+
+
+def _feasible_start(
+    x0: np.ndarray,
+    x_star: np.ndarray,
+    radius: Any,
+    peak: Any,
+    max_sensitivity: float | None,
+    lower: np.ndarray,
+    upper: np.ndarray,
+) -> tuple[np.ndarray, bool]:
+    """A stable point (with |S| <= max_sensitivity) near ``x0``: the best of the segment to ``x_star``, then
+    the sensitivity peak minimised from it (Nelder-Mead, a few parameters), stopping once inside the limit
+    with a margin. Returns the point and whether it is feasible (if not: the lowest peak reached)."""
+    target = (max_sensitivity if max_sensitivity is not None else np.inf) * (1.0 - 1e-3)
+
+    def phase1(x: np.ndarray) -> float:
+        if np.any(x > upper) or np.any(x < lower):
+            return 1e9
+        try:
+            r = radius(x)
+        except ValueError:
+            return 1e9
+        if r >= 1.0 - 1e-6:
+            return 1e3 * (1.0 + r)  # unstable: towards stability first
+        return peak(x) if max_sensitivity is not None else 0.0
+
+    candidates = [x0 + t * (x_star - x0) for t in np.linspace(0.0, 1.0, 11)]
+    scores = [phase1(x) for x in candidates]
+    best = candidates[int(np.argmin(scores))]
+    if min(scores) <= target:
+        return best, True
+
+    def stop(intermediate_result: optimize.OptimizeResult) -> None:
+        if intermediate_result.fun <= target:
+            raise StopIteration
+
+    n = x0.size
+    simplex = np.vstack([best] + [best + 0.2 * np.eye(n)[j] for j in range(n)])
+    result = optimize.minimize(phase1, best, method="Nelder-Mead", callback=stop,
+                               options={"initial_simplex": simplex, "maxfev": 400 * n, "xatol": 1e-4,
+                                        "fatol": 1e-4})  # fmt: skip
+    x = result.x if phase1(result.x) <= phase1(best) else best
+    return x, bool(phase1(x) <= target)

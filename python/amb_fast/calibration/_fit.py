@@ -17,7 +17,19 @@ from .._blas import one_blas_thread
 from .._experiment import Estimate
 from .._linear import AnyController, is_controller
 from .._params import Rig
-from ._problem import _LINEAR_SCALE, FITTABLE, _as_list, _bounds, _check_controller, _data, _free_start, _Model, _Space
+from ..controllers import recorded_controller
+from ._problem import (
+    _LINEAR_SCALE,
+    FITTABLE,
+    _as_list,
+    _bounds,
+    _check_controller,
+    _data,
+    _free_start,
+    _Model,
+    _Space,
+    same_controller,
+)
 from ._result import MISFIT_P, RigFit
 
 ControllerArg = Union[AnyController, Sequence[AnyController]]
@@ -27,7 +39,7 @@ ControllerArg = Union[AnyController, Sequence[AnyController]]
 def fit_rig(
     estimates: Estimate | Sequence[Estimate],
     rig: Rig,
-    controllers: ControllerArg,
+    controllers: ControllerArg | None = None,
     *,
     free: Sequence[str] | Mapping[str, float],
     bounds: Mapping[str, tuple[float, float]] | None = None,
@@ -41,8 +53,12 @@ def fit_rig(
         controllers (the baseline and another gain set) decorrelate parameters.
     rig : Rig
         Start values of the free parameters and the fixed values of all others.
-    controllers : PID or Controller, or a sequence of them
-        The controller of each estimate (one per estimate, all at one ``fs``).
+    controllers : PID or Controller, or a sequence of them, optional
+        The controller of each estimate (one per estimate, all at one ``fs``). By default the controller
+        each estimate records (``estimate.meta["controller"]``: :func:`amb_fast.run_experiment` and a file
+        saved by :meth:`Estimate.save <amb_fast.Estimate.save>` record it). A controller given for an
+        estimate that records another one (a different response at its lines, or another ``fs``) is an
+        error: the fit would model the wrong loop. :attr:`RigFit.inputs` says which was used.
     free : sequence of str, or dict of str to float
         The rig fields to fit: ``mass``, ``kyy``, ``kiy``, ``amp_bandwidth``, ``eddy_bandwidth``,
         ``sensor_bandwidth``, ``mass_loading``, ``force_coupling_tau``, ``dead_time``. A dict gives start
@@ -89,14 +105,9 @@ def fit_rig(
     if not isinstance(rig, Rig):
         raise ValueError(f"rig must be an amb_fast.Rig, got {type(rig).__name__}")
     est_list = _as_list(estimates, lambda v: hasattr(v, "H"))
-    ctrl_list = _as_list(controllers, is_controller)
     if not est_list:
         raise ValueError("estimates must hold at least one Estimate, got none")
-    for i, c in enumerate(ctrl_list):
-        _check_controller(c, f"controllers[{i}]")
-    if len(ctrl_list) != len(est_list):
-        raise ValueError(f"controllers must give one controller per estimate: {len(est_list)} estimate(s), "
-                         f"{len(ctrl_list)} controller(s)")  # fmt: skip
+    ctrl_list, inputs = _controllers(est_list, controllers)
     start = _free_start(rig, free)
     names = tuple(start)
     space = _Space(
@@ -176,13 +187,14 @@ def fit_rig(
         lines=lines,
         estimates=len(data),
         start=dict(start),
+        inputs=tuple(inputs),
         _space=space,
         _x=x,
         _cov_x=cov_x,
         _lower=lower,
         _upper=upper,
     )
-    if not fit.fits:
+    if dof > 0 and not fit.fits:
         warnings.warn(
             f"the fitted model cannot fit the data: chi2 = {chi2:.1f} for {dof} degrees of freedom, "
             f"p = {p_value:.3g} < {MISFIT_P:g}; see RigFit.report()",
@@ -190,3 +202,38 @@ def fit_rig(
             stacklevel=2,
         )
     return fit
+
+
+def _controllers(estimates: list[Estimate], controllers: ControllerArg | None) -> tuple[list[AnyController], list[str]]:
+    """The controller of each estimate (given, or the one it records) and a line per estimate saying which
+    controller and how many periods the fit uses, and where they come from."""
+    recorded = [recorded_controller((getattr(e, "meta", None) or {}).get("controller")) for e in estimates]
+    if controllers is None:
+        missing = [i for i, c in enumerate(recorded) if c is None]
+        if missing:
+            raise ValueError(
+                f"controllers: estimates{missing} record no controller (an estimate identified from a recording, "
+                "or a plain CSV table): give controllers=, one per estimate"
+            )
+        ctrl_list, source = recorded, ["recorded in the estimate"] * len(recorded)
+    else:
+        ctrl_list = _as_list(controllers, is_controller)
+        for i, c in enumerate(ctrl_list):
+            _check_controller(c, f"controllers[{i}]")
+        if len(ctrl_list) != len(estimates):
+            raise ValueError(f"controllers must give one controller per estimate: {len(estimates)} estimate(s), "
+                             f"{len(ctrl_list)} controller(s)")  # fmt: skip
+        source = []
+        for i, (given, record, est) in enumerate(zip(ctrl_list, recorded, estimates)):
+            if record is None:
+                source.append("given (the estimate records none)")
+                continue
+            if not same_controller(given, record, np.asarray(est.freq, dtype=float)):
+                raise ValueError(
+                    f"controllers[{i}] is {given!r}, but estimates[{i}] was measured with {record!r} (its record): "
+                    "leave controllers out to use the recorded ones, or give the controller of the measurement"
+                )
+            source.append("given, the one the estimate records")
+    inputs = [f"estimates[{i}]: {c!r} ({s}); {getattr(e, 'blocks', '?')} periods averaged"
+              for i, (c, s, e) in enumerate(zip(ctrl_list, source, estimates))]  # fmt: skip
+    return ctrl_list, inputs

@@ -14,6 +14,7 @@ import numpy as np
 
 from .._linear import _plant_responses, controller_matrices, is_controller, state_response, transducer_response
 from .._params import Rig
+from ..controllers import as_controller
 
 # Rig fields the linear response depends on: (scale of the fit, unit). "log": fitted as ln(value)
 # (strictly positive); "linear": fitted as value / scale (kyy keeps its sign; mass_loading and
@@ -208,3 +209,14 @@ class _Model:
         Pf, Pu = _plant_responses(rig, self.fs, self.freq)
         Tr = transducer_response(rig, self.fs, self.z)
         return [(1.0 - Pu[rows] * G) * Tr[rows] / Pf[rows] for rows, G in zip(self.index, self.G)]
+
+
+def same_controller(a: Any, b: Any, freq: np.ndarray, rtol: float = 1e-9) -> bool:
+    """Whether two controllers have one ``fs`` and the same response (delay included) at ``freq`` (Hz),
+    to ``rtol`` of the largest |G|: a PID and its Controller are the same controller."""
+    ca, cb = as_controller(a, "controller"), as_controller(b, "controller")
+    if ca.fs != cb.fs:
+        return False
+    f = freq[freq < ca.fs / 2] if freq.size else np.array([1.0])
+    ga, gb = ca.response(f), cb.response(f)
+    return bool(np.max(np.abs(ga - gb), initial=0.0) <= rtol * max(np.max(np.abs(ga), initial=0.0), 1e-300))

@@ -5,8 +5,10 @@ the text report.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -15,6 +17,7 @@ from .._blas import one_blas_thread
 from .._equality import ArrayRecord
 from .._linear import AnyController, predict
 from .._params import Rig
+from .._toml import save_rig
 from ._problem import _check_controller, _Space
 
 CORRELATED = 0.9  # |correlation| above which two parameters are named as not separately identifiable
@@ -48,6 +51,9 @@ class RigFit(ArrayRecord):
         real and imaginary parts (each Student-t like with ``nu`` degrees of freedom for a correct model).
     units : dict of str to str
         Unit of each free parameter.
+    inputs : tuple of str
+        One line per estimate: the controller the fit modelled it with (given, or recorded in the
+        estimate) and the periods averaged (the degrees of freedom of its weights).
     """
 
     rig: Rig
@@ -65,6 +71,7 @@ class RigFit(ArrayRecord):
     lines: int
     estimates: int
     start: dict[str, float]
+    inputs: tuple[str, ...]
     _space: _Space = field(repr=False)
     _x: np.ndarray = field(repr=False)
     _cov_x: np.ndarray = field(repr=False)
@@ -129,11 +136,25 @@ class RigFit(ArrayRecord):
         (k, c), (k_std, c_std) = self._propagate(evaluate)
         return k, c, k_std, c_std
 
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the fitted rig to a TOML rig file (:func:`amb_fast.load_rig`, ``amb-fast design --rig`` and
+        ``amb-fast run --rig`` read it): every :class:`~amb_fast.Rig` field, and a ``[fit]`` table recording
+        the free parameters' values, standard errors and the goodness of fit (not read back)."""
+        record: dict[str, Any] = {"free": list(self.names)}
+        for n in self.names:
+            record[n] = self.values[n]
+            record[f"{n}_std"] = self.std[n]
+        record.update(chi2=self.chi2, dof=self.dof, p_value=self.p_value, fits=self.fits, estimates=self.estimates,
+                      lines=self.lines)  # fmt: skip
+        return save_rig(self.rig, path, extra={"fit": record})
+
     def report(self) -> str:
         """A text table of the fitted parameters (value, standard error, 95 % interval, unit), the goodness
         of fit, and the pairs of parameters the data cannot tell apart."""
         out = [
             f"Rig calibrated to {self.estimates} estimate(s), {self.lines} lines, {len(self.names)} free parameter(s)",
+            "",
+            *self.inputs,
             "",
             f"{'parameter':<20} {'start':>12} {'value':>12} {'std':>10} {'95 % interval':>27}  unit",
         ]
@@ -141,10 +162,15 @@ class RigFit(ArrayRecord):
             lo, hi = self.interval[n]
             out.append(f"{n:<20} {self.start[n]:12.6g} {self.values[n]:12.6g} {self.std[n]:10.3g} "
                        f"{f'[{lo:.6g}, {hi:.6g}]':>27}  {self.units[n]}")  # fmt: skip
-        ratio = self.chi2 / self.dof if self.dof > 0 else float("nan")
-        out += ["", f"goodness of fit     chi2 = {self.chi2:.1f} for {self.dof} degrees of freedom "
-                    f"(chi2/dof = {ratio:.3f}), p = {self.p_value:.3g}"]  # fmt: skip
-        if self.fits:
+        if self.dof <= 0:  # as many parameters as data: nothing left to test the model with (no NaN printed)
+            out += ["", f"goodness of fit     not testable: {2 * self.lines} values for {len(self.names)} free "
+                        "parameters leave no degrees of freedom"]  # fmt: skip
+        else:
+            out += ["", f"goodness of fit     chi2 = {self.chi2:.1f} for {self.dof} degrees of freedom "
+                        f"(chi2/dof = {self.chi2 / self.dof:.3f}), p = {self.p_value:.3g}"]  # fmt: skip
+        if self.dof <= 0:
+            pass
+        elif self.fits:
             out.append("                    the model is consistent with the data")
         else:
             out.append(

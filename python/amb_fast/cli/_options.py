@@ -15,6 +15,7 @@ import numpy as np
 from .._excitation import schroeder_multisine
 from .._linear import AnyController
 from .._params import PID, Rig
+from .._toml import load_rig
 from ..controllers import load_controller
 from ..io import atomic_path
 
@@ -133,6 +134,8 @@ def _values(text: str) -> np.ndarray:
 
 def _add_model_options(parser: argparse.ArgumentParser, gains: bool = True) -> None:
     rig = parser.add_argument_group("rig (defaults: Rig.paper())")
+    rig.add_argument("--rig", type=Path, metavar="FILE", help="rig file (TOML or JSON, as `fit --out` writes) "
+                     "replacing Rig.paper(); the rig options below change its values")  # fmt: skip
     for option, (_, unit, text) in RIG_OPTIONS.items():
         rig.add_argument(f"--{option}", type=_number_or_none, default=argparse.SUPPRESS, metavar="X",
                          help=f"{text} ({unit})")  # fmt: skip
@@ -167,7 +170,8 @@ def _model(args: argparse.Namespace, *, gains: bool = True) -> tuple[Rig, AnyCon
                    if hasattr(args, o.replace("-", "_")) and (gains or field not in ("kp", "ki", "kd"))}  # fmt: skip
     if hasattr(args, "delay"):
         pid_changes["delay"] = args.delay
-    rig = replace(Rig.paper(), **rig_changes)
+    base = Rig.paper() if getattr(args, "rig", None) is None else load_rig(args.rig)
+    rig = replace(base, **rig_changes)
     if getattr(args, "controller", None) is None:
         return rig, replace(PID.paper(), **pid_changes)
     if pid_changes:

@@ -17,13 +17,15 @@ the field), ``_file`` (controller files).
 from __future__ import annotations
 
 from ._blocks import lead_lag, low_pass, notch, pid_controller, second_order
-from ._controller import Controller, gain, parallel, pure_delay, series
-from ._file import load_controller
+from ._controller import Controller, as_controller, gain, parallel, pure_delay, series
+from ._file import controller_table, load_controller, recorded_controller, save_controller
 from ._statespace import MAX_ORDER
 
 __all__ = [
     "MAX_ORDER",
     "Controller",
+    "as_controller",
+    "controller_table",
     "gain",
     "lead_lag",
     "load_controller",
@@ -32,6 +34,8 @@ __all__ = [
     "parallel",
     "pid_controller",
     "pure_delay",
+    "recorded_controller",
+    "save_controller",
     "second_order",
     "series",
 ]

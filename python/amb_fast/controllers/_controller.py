@@ -264,6 +264,7 @@ class Controller(_Constructors):
 
     # ---- algebra
     def __mul__(self, other: Any) -> Controller:
+        other = _converted(other)  # a PID composes as its Controller
         if isinstance(other, Controller):
             return series(self, other)
         if isinstance(other, Real) and not isinstance(other, bool):
@@ -271,11 +272,15 @@ class Controller(_Constructors):
         return NotImplemented
 
     def __rmul__(self, other: Any) -> Controller:
+        other = _converted(other)
+        if isinstance(other, Controller):
+            return series(other, self)
         if isinstance(other, Real) and not isinstance(other, bool):
             return series(gain(float(other), self.fs), self)
         return NotImplemented
 
     def __add__(self, other: Any) -> Controller:
+        other = _converted(other)
         if isinstance(other, Controller):
             return parallel(self, other)
         if isinstance(other, Real) and not isinstance(other, bool) and other == 0:
@@ -285,6 +290,9 @@ class Controller(_Constructors):
         return NotImplemented
 
     def __radd__(self, other: Any) -> Controller:
+        other = _converted(other)
+        if isinstance(other, Controller):
+            return parallel(other, self)
         if isinstance(other, Real) and not isinstance(other, bool) and other == 0:
             return self
         if isinstance(other, Real) and not isinstance(other, bool):
@@ -295,6 +303,7 @@ class Controller(_Constructors):
         return -1.0 * self
 
     def __sub__(self, other: Any) -> Controller:
+        other = _converted(other)
         if isinstance(other, (Controller, Real)) and not isinstance(other, bool):
             return self + (-1.0) * other
         return NotImplemented
@@ -318,9 +327,28 @@ class Controller(_Constructors):
 
 
 # ---------------------------------------------------------------------------------------------- combinations
+def as_controller(value: Any, name: str) -> Controller:
+    """``value`` as a :class:`Controller`: a Controller as it is, a PID (anything with ``to_controller``)
+    converted; else a ValueError naming ``name``."""
+    if isinstance(value, Controller):
+        return value
+    convert = getattr(value, "to_controller", None)
+    if callable(convert):
+        converted = convert()
+        if isinstance(converted, Controller):
+            return converted
+    raise ValueError(f"{name} must be a PID or an amb_fast.Controller, got {type(value).__name__}")
+
+
+def _converted(block: Any) -> Any:
+    """A PID (anything with ``to_controller``) as its Controller; anything else as it is (checked later)."""
+    convert = getattr(block, "to_controller", None)
+    return convert() if not isinstance(block, Controller) and callable(convert) else block
+
+
 def _same_fs(blocks: Sequence[Controller], what: str) -> float:
     for block in blocks:
-        require(isinstance(block, Controller), "blocks", block, f"Controllers (in a {what})")
+        require(isinstance(block, Controller), "blocks", block, f"Controllers or PIDs (in a {what})")
     rates = sorted({b.fs for b in blocks})
     require(len(rates) == 1, "fs", rates, f"the same for every block of a {what}")
     return rates[0]
@@ -348,6 +376,7 @@ def series(*blocks: Controller) -> Controller:
     The continuous design is kept (the product) when every block has one.
     """
     require(len(blocks) >= 1, "blocks", blocks, "at least one Controller")
+    blocks = tuple(_converted(b) for b in blocks)
     fs = _same_fs(blocks, "series")
     if len(blocks) == 1:
         return blocks[0]
@@ -375,6 +404,7 @@ def parallel(*blocks: Controller) -> Controller:
     sum) when every block has one.
     """
     require(len(blocks) >= 1, "blocks", blocks, "at least one Controller")
+    blocks = tuple(_converted(b) for b in blocks)
     fs = _same_fs(blocks, "parallel connection")
     if len(blocks) == 1:
         return blocks[0]

@@ -31,15 +31,17 @@ Errors name the file, the block (counted from 1) and the key.
 
 from __future__ import annotations
 
-import json
 import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from .._toml import read_table, to_toml, write_text
 from .._validate import integer, real
 from ._blocks import lead_lag, low_pass, notch, pid_controller, second_order
-from ._controller import Controller, gain, pure_delay, series
+from ._controller import Controller, as_controller, gain, pure_delay, series
 
 
 def _pid(fs: float, **keys: Any) -> Controller:
@@ -67,28 +69,7 @@ _TYPES: dict[str, tuple[Callable[..., Controller], tuple[str, ...], tuple[str, .
 
 
 def _read(path: Path) -> dict[str, Any]:
-    suffix = path.suffix.lower()
-    if suffix == ".json":
-        with open(path, encoding="utf-8") as file:
-            data = json.load(file)
-    elif suffix == ".toml":
-        try:
-            import tomllib  # type: ignore[import-not-found,unused-ignore]
-        except ImportError:  # pragma: no cover - Python < 3.11
-            try:
-                import tomli as tomllib  # type: ignore[no-redef,import-not-found,unused-ignore]
-            except ImportError:
-                raise ImportError(
-                    f"reading the TOML controller file {path} needs Python >= 3.11 or the tomli package "
-                    "(pip install tomli); or write it as JSON"
-                ) from None
-        with open(path, "rb") as file:
-            data = tomllib.load(file)
-    else:
-        raise ValueError(f"path must end in .toml or .json (a controller file), got {str(path)!r}")
-    if not isinstance(data, dict):
-        raise ValueError(f"controller file {path}: the top level must be a table/object, got {type(data).__name__}")
-    return data
+    return read_table(path, "controller file")
 
 
 def load_controller(path: str | os.PathLike[str]) -> Controller:
@@ -99,7 +80,7 @@ def load_controller(path: str | os.PathLike[str]) -> Controller:
     """
     file = Path(path)
     data = _read(file)
-    where = f"controller file {file}"
+    where = f"controller file {str(file)!r}"
     unknown = sorted(set(data) - {"fs", "delay", "block"})
     if unknown:
         raise ValueError(f"{where}: unknown top-level key(s) {', '.join(unknown)}; known: fs, delay, block")
@@ -142,3 +123,81 @@ def _key_of(error: Exception, keys: dict[str, Any]) -> str:
         if text.startswith(key + " "):
             return f"key {key!r}: "
     return ""
+
+
+# ------------------------------------------------------------------------------------------------- writing
+# block kind -> (file type, {local parameter name: file key}); the order of a low-pass is its first fixed value.
+_WRITTEN: dict[str, tuple[str, dict[str, str]]] = {
+    "pid": ("pid", {"kp": "kp", "ki": "ki", "kd": "kd", "derivative_cutoff": "derivative_cutoff"}),
+    "notch": ("notch", {"freq": "freq", "width": "width", "depth": "depth"}),
+    "low_pass": ("low_pass", {"freq": "freq", "damping": "damping"}),
+    "lead_lag": ("lead_lag", {"gain": "gain", "zero": "zero", "pole": "pole"}),
+    "second_order": ("second_order", {k: k for k in ("num_freq", "den_freq", "num_damping", "den_damping", "gain")}),
+    "gain": ("gain", {"gain": "value"}),
+}
+
+
+def _block_table(leaf: Controller) -> dict[str, Any] | None:
+    """The file block of one leaf, or None for a leaf the format has no named block for."""
+    if leaf._kind not in _WRITTEN:
+        return None
+    kind, keys = _WRITTEN[leaf._kind]
+    table: dict[str, Any] = {"type": kind}
+    for name, value in leaf._local:
+        if name == "derivative_cutoff" and value == float("inf"):
+            continue  # no derivative filter: the key left out
+        table[keys[name]] = value
+    if leaf._kind == "low_pass":
+        table["order"] = int(leaf._fixed[0])
+    return table
+
+
+def controller_table(controller: Any) -> dict[str, Any]:
+    """The controller file's table of a PID or :class:`Controller` (what :func:`save_controller` writes).
+
+    A series of the named blocks (pid, notch, low_pass, lead_lag, second_order, gain) is written block by
+    block with their parameters; anything else (a parallel connection, a raw representation) as one
+    ``tf`` block of its transfer function. The delays of the blocks are summed into the file's ``delay``.
+    """
+    c = as_controller(controller, "controller")
+    leaves = list(c._parts) if c._kind == "series" else [c]
+    blocks = [_block_table(leaf) for leaf in leaves]
+    if any(b is None for b in blocks):
+        num, den = Controller.from_ss(*c.to_ss(), fs=c.fs).to_tf()
+        blocks = [{"type": "tf", "num": [float(v) for v in num], "den": [float(v) for v in den]}]
+    return {"fs": c.fs, "delay": c.delay, "block": blocks}
+
+
+def save_controller(controller: Any, path: str | os.PathLike[str]) -> Path:
+    """Write a PID or :class:`Controller` to a TOML controller file that :func:`load_controller` reads
+    back to the same response (the named blocks with their parameters; see :func:`controller_table`)."""
+    file = Path(path)
+    if file.suffix.lower() != ".toml":
+        raise ValueError(f"path must end in .toml (a controller file), got {str(file)!r}")
+    header = "# amb_fast controller file (docs/controllers.md); load with amb_fast.load_controller\n"
+    return write_text(file, header + to_toml(controller_table(controller), {"fs": "Hz", "delay": "whole samples"}))
+
+
+def recorded_controller(record: Any) -> Any:
+    """The controller a saved estimate's metadata describes (``meta["controller"]``): a PID or Controller
+    object as it is; a PID's fields (``{"class": "PID", ...}``) as that PID; a Controller's description as
+    a Controller of the same state space, fs and delay (the same response; block names are not kept).
+    None for a record that describes no controller."""
+    if record is None:
+        return None
+    if isinstance(record, Controller) or callable(getattr(record, "to_controller", None)):
+        return record
+    if not isinstance(record, dict):
+        return None
+    kind = record.get("class")
+    if kind == "PID":
+        from .._params import PID
+
+        return PID(**{k: v for k, v in record.items() if k != "class"})
+    if kind == "Controller":
+        n = len(record["_b"])
+        A = np.asarray(record["_a"], dtype=float).reshape(n, n)
+        B = np.asarray(record["_b"], dtype=float).reshape(n, 1)
+        C = np.asarray(record["_c"], dtype=float).reshape(1, n)
+        return Controller.from_ss(A, B, C, float(record["_d"]), fs=record["fs"], delay=record["delay"])
+    return None

@@ -1,0 +1,170 @@
+"""Small TOML/JSON files of the package: reading them with errors that name the file, writing them, and
+the rig file (:func:`load_rig`, :func:`save_rig`).
+
+A rig file holds the fields of :class:`~amb_fast.Rig` at its top level (SI units, ``"none"`` for a stage
+switched off); a field it leaves out takes ``Rig.paper()``'s value, as the command's options do. Other
+tables (``[fit]`` of a file that :meth:`amb_fast.RigFit.save` writes) are a record for the reader and are
+not read back::
+
+    mass = 0.92              # kg
+    kyy = -53300.0           # N/m
+    kiy = 47.19              # N/A
+    amp_bandwidth = 3000.0   # Hz, or "none"
+    force_law = "linear"
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from collections.abc import Mapping
+from dataclasses import fields, replace
+from pathlib import Path
+from typing import Any
+
+from ._params import Rig
+
+
+def read_table(path: str | os.PathLike[str], what: str) -> dict[str, Any]:
+    """The top-level table of a TOML or JSON file (by its suffix). Every error names ``what`` and the file:
+    a missing file, a syntax error (with its line), a top level that is not a table."""
+    file = Path(path)
+    where = f"{what} {str(file)!r}"
+    suffix = file.suffix.lower()
+    if suffix not in (".toml", ".json"):
+        raise ValueError(f"{where}: path must end in .toml or .json, got {file.suffix or 'no suffix'!r}")
+    if not file.is_file():
+        raise ValueError(f"{where} does not exist" if not file.exists() else f"{where} is not a file")
+    try:
+        if suffix == ".json":
+            with open(file, encoding="utf-8") as handle:
+                data = json.load(handle)
+        else:
+            tomllib = _tomllib(where)
+            with open(file, "rb") as handle:
+                data = tomllib.load(handle)
+    except UnicodeDecodeError as error:
+        raise ValueError(f"{where}: not a text file ({error.reason} at byte {error.start})") from None
+    except ValueError as error:  # json.JSONDecodeError and tomllib.TOMLDecodeError are ValueErrors
+        kind = "JSON" if suffix == ".json" else "TOML"
+        raise ValueError(f"{where}: {kind} syntax error: {error}") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{where}: the top level must be a table/object, got {type(data).__name__}")
+    return data
+
+
+def _tomllib(where: str) -> Any:
+    try:
+        import tomllib  # type: ignore[import-not-found,unused-ignore]
+    except ImportError:  # pragma: no cover - Python < 3.11
+        try:
+            import tomli as tomllib  # type: ignore[no-redef,import-not-found,unused-ignore]
+        except ImportError:
+            raise ImportError(
+                f"reading {where} needs Python >= 3.11 or the tomli package (pip install tomli); or write it as JSON"
+            ) from None
+    return tomllib
+
+
+# ---------------------------------------------------------------------------------------------- writing
+def _value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "nan"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return repr(value)  # shortest text that reads back to the same double
+    if isinstance(value, str):
+        return json.dumps(value)  # a TOML basic string is a JSON string for these texts
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_value(v) for v in value) + "]"
+    raise TypeError(f"cannot write {type(value).__name__} {value!r} to TOML")
+
+
+def to_toml(data: Mapping[str, Any], comments: Mapping[str, str] | None = None) -> str:
+    """TOML text of ``data``: scalars and lists first, then tables (``dict``) and arrays of tables (a list
+    of ``dict``) one level deep; ``comments`` a trailing ``# ...`` per top-level key."""
+    comments = comments or {}
+    out: list[str] = []
+    plain = {k: v for k, v in data.items() if not _is_table(v) and not _is_tables(v)}
+    for key, value in plain.items():
+        note = f"  # {comments[key]}" if key in comments else ""
+        out.append(f"{key} = {_value(value)}{note}")
+    for key, value in data.items():
+        if _is_table(value):
+            out += ["", f"[{key}]"] + [f"{k} = {_value(v)}" for k, v in value.items()]
+        elif _is_tables(value):
+            for table in value:
+                out += ["", f"[[{key}]]"] + [f"{k} = {_value(v)}" for k, v in table.items()]
+    return "\n".join(out) + "\n"
+
+
+def _is_table(value: Any) -> bool:
+    return isinstance(value, Mapping)
+
+
+def _is_tables(value: Any) -> bool:
+    return isinstance(value, (list, tuple)) and bool(value) and all(isinstance(v, Mapping) for v in value)
+
+
+def write_text(path: str | os.PathLike[str], text: str) -> Path:
+    """Write ``text`` to ``path`` atomically (a temporary file in the same folder, then renamed)."""
+    file = Path(path)
+    handle, temporary = tempfile.mkstemp(dir=file.parent if str(file.parent) else ".", prefix=f".{file.name}.")
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8") as out:
+            out.write(text)
+        os.replace(temporary, file)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+    return file
+
+
+# ---------------------------------------------------------------------------------------------- rig files
+_RIG_UNITS = {"mass": "kg", "kyy": "N/m", "kiy": "N/A", "bias_current": "A", "amp_bandwidth": "Hz",
+              "eddy_bandwidth": "Hz", "sensor_bandwidth": "Hz", "substeps": "integration substeps per sample",
+              "sensor_noise": "m rms", "force_noise": "N rms", "mass_loading": "kg", "force_coupling_tau": "s",
+              "clearance": "m", "current_limit": "A", "dead_time": "s"}  # fmt: skip
+
+
+def rig_table(rig: Rig) -> dict[str, Any]:
+    """The fields of ``rig`` as a rig file writes them (``"none"`` for None)."""
+    return {f.name: "none" if getattr(rig, f.name) is None else getattr(rig, f.name) for f in fields(Rig)}
+
+
+def save_rig(rig: Rig, path: str | os.PathLike[str], extra: Mapping[str, Mapping[str, Any]] | None = None) -> Path:
+    """Write ``rig`` to a TOML rig file (read back by :func:`load_rig`); ``extra`` tables are appended."""
+    if not isinstance(rig, Rig):
+        raise ValueError(f"rig must be an amb_fast.Rig, got {type(rig).__name__}")
+    file = Path(path)
+    if file.suffix.lower() != ".toml":
+        raise ValueError(f"path must end in .toml (a rig file), got {str(file)!r}")
+    header = "# amb_fast rig file: Rig fields in SI units ('none': stage switched off); load with amb_fast.load_rig\n"
+    return write_text(file, header + to_toml({**rig_table(rig), **(extra or {})}, _RIG_UNITS))
+
+
+def load_rig(path: str | os.PathLike[str]) -> Rig:
+    """Read a rig file (TOML or JSON): :class:`~amb_fast.Rig` fields at the top level in SI units, ``"none"``
+    for a stage switched off; a field left out takes ``Rig.paper()``'s value. Tables (``[fit]``) are a
+    record and are not read. Errors name the file and the key."""
+    data = read_table(path, "rig file")
+    where = f"rig file {str(Path(path))!r}"
+    known = {f.name for f in fields(Rig)}
+    values = {k: v for k, v in data.items() if not isinstance(v, dict)}
+    unknown = sorted(set(values) - known)
+    if unknown:
+        raise ValueError(f"{where}: unknown key(s) {', '.join(unknown)}; known: {', '.join(sorted(known))}")
+    changes: dict[str, Any] = {
+        k: None if isinstance(v, str) and v.lower() == "none" and k != "force_law" else v for k, v in values.items()
+    }
+    try:
+        return replace(Rig.paper(), **changes)
+    except (ValueError, TypeError) as error:
+        raise ValueError(f"{where}: {error}") from None
