@@ -1,4 +1,5 @@
-"""Figures: damping axes linear over the band that matters, effective and actual overlaid with error bands, insets where the paper zooms."""
+"""Figures: damping axes linear over the band that matters, effective and actual overlaid with error bands,
+insets where the paper zooms."""
 
 from __future__ import annotations
 
