@@ -21,7 +21,8 @@ from typing import Any, ClassVar
 import numpy as np
 
 # Units of the field names the records share (a record adds or overrides its own in ``_units``).
-UNITS = {"freq": "Hz", "H": "N/m", "receptance": "m/N"} | {
+UNITS = {"freq": "Hz", "fs": "Hz", "f0": "Hz", "H": "N/m", "receptance": "m/N", "force": "N", "displacement": "m",
+         "current": "A", "mass": "kg"} | {
     f"{name}{tail}": unit for name, unit in (("k", "N/m"), ("c", "N s/m"))
     for tail in ("", "_smooth", "_std", "_effective", "_eff", "_target", "_miss")
 }  # fmt: skip
