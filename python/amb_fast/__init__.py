@@ -93,6 +93,11 @@ def __getattr__(name: str):  # noqa: ANN202 - loaded on first use: see below
     raise AttributeError(f"module 'amb_fast' has no attribute {name!r}")
 
 
+def __dir__() -> list[str]:
+    """The module's names with those loaded on first use (``__getattr__``), for tab completion and ``dir``."""
+    return sorted({*globals(), *_PLOTS, *_CALIBRATION})
+
+
 CITATION = (
     "amb_fast reproduces the paper kept beside the project as shared/paper/one-axis-em-suspension-stiffness-damping.txt"
     " (sections 2-3, Figs. 4-10): a one-axis electromagnetic suspension under digital PID control, its actual "

@@ -105,6 +105,18 @@ class SweepResult(ArrayRecord):
     blocks: int
     meta: dict[str, Any] = field(default_factory=dict)
 
+    def _repr_head(self) -> list[str]:
+        """The repr's first items: the grid, each axis's values with its unit, the points' status counts."""
+        grid = " x ".join(str(n) for n in self.shape)
+        axes = []
+        for name, values in self.axes.items():
+            shown = [f"{v:.6g}" for v in np.asarray(values, dtype=float)]
+            shown = shown if len(shown) <= 6 else [*shown[:3], "...", shown[-1]]
+            axes.append(f"{name}: [{', '.join(shown)}] {unit_of(name)}".rstrip())
+        names, counts = np.unique(self.status, return_counts=True)
+        status = ", ".join(f"{n}={c}" for n, c in zip(names, counts))
+        return [f"points={len(self.status)} ({self.grid} {grid})", *axes, status, *super()._repr_head()]
+
     @property
     def shape(self) -> tuple[int, ...]:
         """Grid shape: one axis per swept parameter for product grids, else (points,)."""

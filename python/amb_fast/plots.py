@@ -1,8 +1,13 @@
 """Figures (matplotlib, the optional extra ``amb_fast[plot]``). Every function returns its Figure.
 
-Frequencies in Hz on log axes, stiffness in kN/m, damping in N s/m on a linear axis (a symmetric-log
-axis would bend the curves at +-its threshold), receptance in m/N on a log axis. Standard errors are
-drawn as shaded bands of +-2 s.e. under the curves, never as bars over them.
+Frequencies in Hz on log axes, stiffness in kN/m, damping in N s/m, receptance in m/N on a log axis.
+Standard errors are drawn as shaded bands of +-2 s.e. under the curves, never as bars over them.
+
+Damping axes are linear, unless a few lines lie far outside the rest (an integral gain's ``-K_i k_i / w``
+at the lowest lines: -21,700 N s/m at 1 Hz for the paper's rig, against +-100 N s/m around resonance): then
+the axis is linear over the band the other lines span and logarithmic beyond (a symmetric-log axis whose
+linear part takes most of the panel), so the damping around resonance stays readable and the lowest lines
+stay in view; the panel says which lines lie in its logarithmic part.
 """
 
 from __future__ import annotations
@@ -19,6 +24,8 @@ if TYPE_CHECKING:
     from ._sweep_result import SweepResult
 
 LABELS = {"kp": ("K_p", "A/m"), "ki": ("K_i", "A/(m s)"), "kd": ("K_d", "A s/m")}
+FENCE = 3.0  # interquartile ranges beyond the quartiles where a damping value counts as far outside the rest
+DECADE = 10.0  # how much larger than the rest the lowest lines must reach for a symmetric-log damping axis
 
 
 def _pyplot() -> Any:
@@ -46,6 +53,59 @@ def _tight_layout(fig: Figure) -> None:
     fig.set_layout_engine(None)  # None (not "none", the placeholder) unless rcParams ask for an automatic layout
 
 
+def _damping_scale(ax, freq: np.ndarray, curves: list[np.ndarray]) -> None:  # noqa: ANN001
+    """Linear damping axis, or symmetric-log when the lowest lines lie more than ``FENCE`` interquartile ranges
+    beyond the quartiles of all the panel's values (the integral term: see the module docstring); noisy lines
+    elsewhere in the band do not count. ``curves`` at ``freq``."""
+    table = np.vstack([np.asarray(c, dtype=float) for c in curves])
+    values = table[np.isfinite(table)]
+    if values.size < 8:
+        return
+    q1, q3 = np.percentile(values, [25.0, 75.0])
+    spread = max(q3 - q1, 1e-12 * max(abs(q1), abs(q3), 1.0))
+    with np.errstate(invalid="ignore"):
+        far = ((table < q1 - FENCE * spread) | (table > q3 + FENCE * spread)).any(axis=0)
+    lowest = int(np.argmin(far)) if not far.all() else far.size  # far lines from the lowest one on
+    rest = table[:, lowest:]
+    rest = rest[np.isfinite(rest)]
+    if lowest == 0 or rest.size == 0:
+        return
+    threshold = 1.1 * float(np.max(np.abs(rest)))
+    if np.nanmax(np.abs(table[:, :lowest])) <= DECADE * threshold:
+        return  # on a linear axis the rest still spans a tenth of the panel or more
+    from matplotlib.ticker import FixedLocator, FuncFormatter
+
+    # the linear part (+-threshold) spans 3 decades per side: most of the panel for a decade or two beyond
+    ax.set_yscale("symlog", linthresh=threshold, linscale=3.0)
+    low, high = float(values.min()), float(values.max())
+    pad = 0.05 * (min(high, threshold) - max(low, -threshold))
+    ax.set_ylim(low - pad if low >= -threshold else low * 1.3, high + pad if high <= threshold else high * 1.3)
+    step = _nice_above(threshold / 3.0)
+    half = np.floor(threshold / step + 1e-9) * step
+    linear = np.arange(-half, half + step / 2, step)
+    decades = [s * 10.0**e for e in range(int(np.log10(2.5 * threshold)) + 1, 13) for s in (-1.0, 1.0)]
+    ticks = [t for t in (*linear, *decades) if low - step <= t <= high + step]
+    ax.yaxis.set_major_locator(FixedLocator(sorted(ticks)))
+    ax.yaxis.set_minor_locator(FixedLocator([]))
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:,.0f}" if abs(v) >= 1 else f"{v:g}"))
+    with np.errstate(invalid="ignore"):
+        outside = (np.abs(table) > threshold).any(axis=0)
+    if outside.any():
+        f = freq[outside]
+        where = f"{f.min():.4g} Hz" if f.size == 1 else f"{f.min():.4g}-{f.max():.4g} Hz"
+        ax.text(0.99, 0.03, f"log scale beyond +-{threshold:,.0f} N s/m ({where})", transform=ax.transAxes,
+                ha="right", va="bottom", fontsize=7, color="0.35")  # fmt: skip
+
+
+def _nice_above(value: float) -> float:
+    """The smallest of 1, 2, 2.5, 5 x 10^n at or above ``value`` (> 0)."""
+    exponent = np.floor(np.log10(value))
+    for mantissa in (1.0, 2.0, 2.5, 5.0, 10.0):
+        if mantissa * 10**exponent >= value * (1 - 1e-12):
+            return float(mantissa * 10**exponent)
+    return float(10 ** (exponent + 1))  # pragma: no cover
+
+
 def _coefficient_axes(axes: np.ndarray, freq_unit: str = "Hz") -> None:
     axes[0].set_ylabel("stiffness k (kN/m)")
     axes[1].set_ylabel("damping c (N s/m)")
@@ -68,6 +128,7 @@ def plot_coefficients(
     if raw is not None:
         axes[0].legend()
     _coefficient_axes(axes)
+    _damping_scale(axes[1], freq, [c] if raw is None else [c, raw[1]])
     axes[0].set_title(title)
     _tight_layout(fig)
     return fig
@@ -100,6 +161,7 @@ def plot_overlay(
         ax.plot(f, np.asarray(effective) / scale, color="C3", lw=1.5, ls="--", label="effective")
     axes[0].legend(fontsize=8)
     _coefficient_axes(axes)
+    _damping_scale(axes[1], f, [estimate.c_smooth, np.asarray(c_eff, dtype=float)])
     axes[0].set_title(title)
     _tight_layout(fig)
     return fig
@@ -115,25 +177,72 @@ def _inset(ax, freq: np.ndarray, curves: list[tuple[np.ndarray, str]], zoom: tup
     ax.indicate_inset_zoom(inner, edgecolor="0.5")
 
 
+def _axis_label(name: str) -> tuple[str, str]:
+    """(symbol, unit) of a sweep axis: the paper's symbols for the PID gains, else the parameter's own name."""
+    from ._sweep_result import unit_of
+
+    return LABELS.get(name, (name, unit_of(name)))
+
+
+def _point_label(names: list[str], values: list[float]) -> str:
+    parts = []
+    for name, value in zip(names, values):
+        symbol, unit = _axis_label(name)
+        parts.append(f"{symbol} = {value:.6g}" + (f" {unit}" if unit else ""))
+    return ", ".join(parts)
+
+
 def plot_family(
     result: SweepResult,
-    name: str,
+    name: str | None = None,
     *,
     zoom: tuple[float, float] | None = None,
     inset: tuple[float, float] | None = None,
 ) -> Figure:
-    """Paper Figs. 6-10: k, c and |Y/F| for one gain family; ``zoom`` (Hz) narrows to a band, linear axes;
-    ``inset`` (Hz) adds a zoomed inset of that band to the stiffness and receptance panels (where the paper
-    zooms: Figs. 7 and 9)."""
-    symbol, unit = LABELS[name]
+    """k, c and |Y/F| of every point of a sweep, one curve per point (paper Figs. 6-10: one gain family).
+
+    Parameters
+    ----------
+    result : SweepResult
+        Any sweep: over PID gains, a rig field (``amp_bandwidth``), a controller block's parameter
+        (``notch_freq``), one axis or a grid of several.
+    name : str, optional
+        The swept parameter the figure is about: named first in every legend entry and in the title.
+        Default: the sweep's first axis. Every swept parameter is in every legend entry (a kp x kd grid
+        shows both gains), with its unit.
+    zoom : (float, float), optional
+        Narrows to that band (Hz), on linear axes.
+    inset : (float, float), optional
+        Adds a zoomed inset of that band (Hz) to the stiffness and receptance panels (where the paper
+        zooms: Figs. 7 and 9).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Points that did not give an estimate (unstable, touchdown, ...) are listed in the legend with their
+        status (their curves are NaN). The damping axis is linear, or symmetric-log when the lowest lines lie
+        far outside the rest (see :mod:`amb_fast.plots`).
+    """
+    swept = list(result.points)
+    if name is None:
+        name = swept[0]
+    if name not in result.points:
+        raise ValueError(f"name must be one of the swept parameters {swept}, got {name!r}")
+    names = [name, *(n for n in swept if n != name)]
+    symbol = _axis_label(name)[0]
     fig, axes = _figure(3, height=2.6)
     freq = result.freq
     band = np.ones(freq.size, dtype=bool) if zoom is None else (freq >= zoom[0]) & (freq <= zoom[1])
-    for row, value in enumerate(result.points[name]):
-        label = f"{symbol} = {value:.4g} {unit}"
+    rows = range(len(result.status))
+    with np.errstate(divide="ignore", invalid="ignore"):  # NaN rows of points without an estimate
+        receptance = np.abs(1 / result.H)
+    for row in rows:
+        label = _point_label(names, [float(result.points[n][row]) for n in names])
+        if result.status[row] != "ok":
+            label += f" ({result.status[row]})"
         axes[0].plot(freq[band], result.k_smooth[row, band] / 1e3, label=label)
         axes[1].plot(freq[band], result.c_smooth[row, band], label=label)
-        axes[2].plot(freq[band], np.abs(1 / result.H[row, band]), label=label)
+        axes[2].plot(freq[band], receptance[row, band], label=label)
     axes[2].set_ylabel("|Y/F| (m/N)")
     _coefficient_axes(axes)
     if zoom is None:
@@ -141,13 +250,15 @@ def plot_family(
     else:
         for ax in axes:
             ax.set_xscale("linear")
+    _damping_scale(axes[1], freq[band], [result.c_smooth[row, band] for row in rows])
     if inset is not None and zoom is None:
-        rows = range(len(result.points[name]))
         _inset(axes[0], freq, [(result.k_smooth[r] / 1e3, "") for r in rows], inset)
-        _inset(axes[2], freq, [(np.abs(1 / result.H[r]), "") for r in rows], inset)
-    axes[0].legend(fontsize=8)
+        _inset(axes[2], freq, [(receptance[r], "") for r in rows], inset)
+    axes[0].legend(fontsize=8 if len(names) == 1 else 7)
     where = "" if zoom is None else f", {zoom[0]:.0f}-{zoom[1]:.0f} Hz"
-    axes[0].set_title(f"Varying {symbol}{where}")
+    others = [_axis_label(n)[0] for n in names[1:]]
+    title = f"Varying {symbol}" + (f" and {', '.join(others)}" if others else "")
+    axes[0].set_title(f"{title}{where}")
     _tight_layout(fig)
     return fig
 
@@ -168,6 +279,7 @@ def plot_estimate(estimate: Estimate, *, title: str = "Identified stiffness, dam
     axes[2].set_yscale("log")
     axes[2].set_ylabel("|Y/F| (m/N)")
     _coefficient_axes(axes)
+    _damping_scale(axes[1], f, [estimate.c_smooth, estimate.c])
     axes[0].legend(fontsize=8)
     axes[0].set_title(title)
     _tight_layout(fig)

@@ -24,7 +24,7 @@ from .._params import PID, Rig
 from .._sweep import _grid, _progress_bar, point_seeds, points_per_call
 from .._validate import integer, require, seed_value
 from ..io._atomic import atomic_write
-from ..plots import _pyplot, _tight_layout
+from ..plots import _damping_scale, _pyplot, _tight_layout
 from ._experiment import Estimate2, _core_pair, _point_args, _window, coefficients2, run_experiment
 from ._model import (
     ControllerMatrix,
@@ -273,9 +273,11 @@ def plot_coefficients2(estimate: Estimate2, *, smoothed: bool = False, effective
             if effective is not None:
                 ax.plot(estimate.freq, effective[row][:, i, j], "--", label="effective")
             ax.set_title(f"{name}{label} ({unit})")
-            ax.grid(True, alpha=0.3)
+            ax.set_xscale("log")  # as every other coefficient figure
+            ax.grid(True, which="both", alpha=0.3)
             if row == 1:
                 ax.set_xlabel("frequency (Hz)")
+                _damping_scale(ax, estimate.freq, [values[:, i, j]])
     axes[0, 0].legend()
     _tight_layout(fig)
     return fig
