@@ -131,6 +131,12 @@ def build_parser() -> argparse.ArgumentParser:
                        "records it (a file amb_fast wrote)")  # fmt: skip
     ident.add_argument("--f-max", type=float, help="highest excited line (Hz; default: detected from the force)")
     ident.add_argument(
+        "--lines",
+        type=_values,
+        metavar="F1,F2,...",
+        help="take exactly these lines (Hz, multiples of --f0; 'a,b,c' or 'start:stop:count')",
+    )
+    ident.add_argument(
         "--settle-periods",
         type=int,
         default=0,

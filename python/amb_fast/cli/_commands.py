@@ -252,7 +252,7 @@ def cmd_identify(args: argparse.Namespace) -> None:
     _needs("matplotlib", "plot", "identify (it draws the figure)")
     rec = _read_recording(args)
     estimate = identify(rec.force, rec.displacement, fs=rec.fs, f0=args.f0, mass=mass, f_max=args.f_max,
-                        settle_periods=args.settle_periods, median_window=args.median_window,
+                        lines=args.lines, settle_periods=args.settle_periods, median_window=args.median_window,
                         clearance=args.clearance)  # fmt: skip
     if args.at is None:
         args.at = default_at(estimate.freq)

@@ -231,7 +231,7 @@ MODEL_OPTION_NAMES = {field: f"--{option}" for option, (field, _, _) in {**RIG_O
 IDENTIFY_OPTION_NAMES = {
     "fs": "--fs", "f0": "--f0", "f_max": "--f-max", "mass": "--mass", "settle_periods": "--settle-periods",
     "median_window": "--median-window", "clearance": "--clearance", "recording": "--recording", "time": "--time",
-    "path": "FILE",
+    "lines": "--lines", "path": "FILE",
 }  # fmt: skip
 #: Names that also stand for the data ("force must be finite" is about the samples, "time must be increasing"
 #: about the column): only ``name=`` is taken for an option.
@@ -240,19 +240,31 @@ _DATA = frozenset({"time", "force", "displacement", "path"})
 
 def cli_text(text: str, names: dict[str, str]) -> str:
     """``text`` with the library's parameter names replaced by the options in ``names``: ``name=`` anywhere
-    (``pass fs=`` -> ``pass --fs``); a name with an underscore anywhere as a word; other names where they
-    stand in an ``a/b`` pair (``fs/f0 must be``) or precede ``must`` or a parenthesis."""
+    (``pass fs=`` -> ``pass --fs``, ``time=None`` -> ``--time none``); a name with an underscore anywhere as a
+    word; other names where they stand in an ``a/b`` pair (``fs/f0 must be``) or precede ``must`` or a
+    number in parentheses. A hint in both spellings, ``(A; on the command line B)``, keeps the command's half."""
+
+    def one_spelling(match: re.Match) -> str:  # "(force=1; on the command line --force 1)" -> "(--force 1)"
+        python, command = match.group(1), match.group(2)
+        return f"({command})" if "=" in python else f"({python})"  # "pass fs= (Hz; ...)": fs= becomes --fs
 
     def swap(match: re.Match) -> str:
         name, equals = match.group("name"), match.group("equals")
         if name not in names:
             return match.group(0)
-        if equals:  # "recording=NAME" -> "--recording NAME"; a trailing "=" is dropped
-            return names[name] + (" " + equals[1:] if equals[1:] else "")
+        if equals is not None:  # "recording=NAME" -> "--recording NAME", "time=None" -> "--time none"
+            value = equals[1:]
+            return names[name] + (" " + ("none" if value == "None" else value) if value else "")
         if name in _DATA:
             return match.group(0)
         start, end = match.start(), match.end()
-        leads = (start > 0 and text[start - 1] == "/") or text.startswith(("/", " must", " ("), end)
+        leads = (
+            (start > 0 and text[start - 1] == "/")
+            or text.startswith(("/", " must"), end)
+            or re.match(r" \(-?\d", text[end:]) is not None
+        )  # "at least f0 (1.0 Hz)", not "the wrong lines (pass"
         return names[name] if "_" in name or leads else match.group(0)
 
-    return re.sub(r"(?<![\w\-'\".])(?P<name>[A-Za-z_][A-Za-z0-9_]*)(?P<equals>=[A-Z]*)?(?![\w'\"])", swap, text)
+    text = re.sub(r"\(([^();]*); on the command line ([^()]*)\)", one_spelling, text)
+    return re.sub(r"(?<![\w\-'\".])(?P<name>[A-Za-z_][A-Za-z0-9_]*)(?P<equals>=(?:None|[A-Z]+)?)?(?![\w'\"])", swap,
+                  text)  # fmt: skip
