@@ -6,6 +6,7 @@ import argparse
 import json
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -126,11 +127,11 @@ def cmd_run(args: argparse.Namespace) -> None:
         print(f"wrote {args.figure}")
 
 
-def _swept(args: argparse.Namespace, rig: Rig, controller: AnyController) -> dict[str, np.ndarray]:
+def _swept(args: argparse.Namespace, controller: AnyController) -> dict[str, Any]:
     """The sweep's axes, as :func:`amb_fast.sweep` takes them: ``--kp/--ki/--kd`` and every ``--vary NAME=VALUES``
     (a Rig field or a controller parameter), in the order given; refused before any work when a name is unknown,
     given twice, or also set to one value by its own option."""
-    axes = {name: getattr(args, name) for name in ("kp", "ki", "kd") if getattr(args, name) is not None}
+    axes: dict[str, Any] = {n: getattr(args, n) for n in ("kp", "ki", "kd") if getattr(args, n) is not None}
     known = [*RIG_FIELDS, *_controller_params(controller)]
     for item in args.vary:
         name, equals, text = item.partition("=")
@@ -159,7 +160,7 @@ def cmd_sweep(args: argparse.Namespace) -> None:
         if args.grid == "zip":  # written through xarray (product grids are written directly)
             _needs("xarray", "xarray", "--out .nc with --grid zip")
     rig, pid = _model(args, gains=False)
-    axes = _swept(args, rig, pid)
+    axes = _swept(args, pid)
     if not axes:
         raise UsageError("give at least one of --kp, --ki, --kd, --vary (e.g. --kp 2000:3000:11 or "
                          "--vary amp_bandwidth=1000:3000:5)")  # fmt: skip
