@@ -158,3 +158,12 @@ def test_the_default_table_follows_the_band(capsys, recorded) -> None:
     at = [float(row[0]) for row in rows]
     assert at[0] == 1.0 and at[-1] == 20.0 and len(at) == 4
     assert "natural frequency   none in 1-20 Hz (Re F/Y > 0 throughout" in out
+
+
+def test_a_mat_file_written_by_amb_fast_gives_its_mass(capsys, tmp_path, monkeypatch, trace) -> None:
+    monkeypatch.chdir(tmp_path)
+    trace.save(tmp_path / "rec.mat")
+    status, out, err = run(capsys, "identify", "rec.mat", "--settle-periods", "2")
+    assert status == 0, err
+    assert "mass                1.5 kg (recorded in rec.mat)" in out
+    np.testing.assert_allclose(af.load_estimate(tmp_path / "identify-output" / "estimate.csv").meta["mass"], 1.5)

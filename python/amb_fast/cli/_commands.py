@@ -188,22 +188,36 @@ def _channel(text: str) -> str | int:
     return int(text) if text.isdigit() else text
 
 
+def _rig_mass(meta: object) -> float | None:
+    rig = meta.get("rig") if isinstance(meta, dict) else None
+    mass = rig.get("mass") if isinstance(rig, dict) else None
+    return float(mass) if isinstance(mass, (int, float)) and np.isfinite(mass) and mass > 0 else None
+
+
 def _file_mass(path: Path) -> float | None:
     """The moving mass (kg) a recording written by amb_fast records (``simulate(...).save``, ``save_recording``
-    with a rig in ``meta``: the ``# meta:`` line at the end of a text file), else None."""
-    if path.suffix.lower() not in (".csv", ".tsv", ".txt"):
+    with a rig in ``meta``: the ``# meta:`` line at the end of a text file, the ``amb_fast`` text variable of a
+    ``.mat``), else None."""
+    suffix = path.suffix.lower()
+    if suffix == ".mat":
+        from scipy.io import loadmat
+
+        try:  # a v7.3 (HDF5) or damaged file records nothing here; the reader reports a damaged one
+            stamp = loadmat(path, variable_names=["amb_fast"]).get("amb_fast")
+            return None if stamp is None else _rig_mass(json.loads(str(np.asarray(stamp).ravel()[0])))
+        except Exception:  # noqa: BLE001
+            return None
+    if suffix not in (".csv", ".tsv", ".txt"):
         return None
-    with path.open("rb") as handle:  # the metadata trails the data: read the last few kB only
+    with path.open("rb") as handle:  # the metadata trails the data: read the last 64 kB only
         handle.seek(max(0, path.stat().st_size - 65536))
         tail = handle.read().decode("utf-8", errors="replace")
     for line in reversed(tail.splitlines()):
         if line.startswith("# meta: "):
             try:
-                rig = json.loads(line[len("# meta: ") :]).get("rig")
+                return _rig_mass(json.loads(line[len("# meta: ") :]))
             except ValueError:
                 return None
-            mass = rig.get("mass") if isinstance(rig, dict) else None
-            return float(mass) if isinstance(mass, (int, float)) and np.isfinite(mass) and mass > 0 else None
     return None
 
 
