@@ -84,7 +84,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_two_axis_options(run)
     run.set_defaults(func=cmd_run, option_names=MODEL_OPTION_NAMES)
 
-    sw = sub.add_parser("sweep", allow_abbrev=False, parents=[common], help="a gain grid to NetCDF (.nc), .npz or CSV")
+    sw = sub.add_parser("sweep", allow_abbrev=False, parents=[common],
+                        help="a grid of gains, rig fields or controller parameters to .nc, .npz or .csv")  # fmt: skip
     _add_model_options(sw, gains=False)
     for name, (_, unit, text) in list(PID_OPTIONS.items())[:3]:
         sw.add_argument(f"--{name}", type=_values, help=f"{text} values ({unit}): 'a,b,c' or 'start:stop:count'")
