@@ -232,3 +232,11 @@ def test_sweep_result_saves_csv_as_the_command_writes_it_without_warnings(capsys
     assert text.splitlines()[-1].startswith("# meta: ")
     with pytest.raises(ValueError, match=r"a sweep's \.csv is for other tools"):
         af.load_sweep(tmp_path / "api.csv")
+
+
+def test_rotor_sensitivity_refuses_periods_before_the_run_and_keeps_its_band_below_nyquist(capsys) -> None:
+    """Siblings in ``amb-fast rotor``: ``--periods 1`` was exit status 1 ("periods must be ...", a failed run);
+    its 2-1000 Hz test signal was fixed whatever the controller's fs."""
+    status, _, err = run(capsys, "rotor", "sensitivity", "--periods", "1")
+    assert status == 2 and "--periods must be a whole number >= 2, got 1" in one_error_line(err)
+    assert default_f_max(2.0, 4000.0, 1000.0) == 1000.0 and default_f_max(2.0, 1500.0, 1000.0) == 748.0

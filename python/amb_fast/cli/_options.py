@@ -190,13 +190,13 @@ DEFAULT_F_MAX = 200.0  # Hz: the paper's band
 DEFAULT_AT = (10.0, 40.0, 100.0, 200.0)  # Hz: the paper's table
 
 
-def default_f_max(f0: float, fs: float) -> float:
-    """The default highest line (Hz): 200 Hz, or the highest harmonic of ``f0`` below ``fs/2`` when that is
-    lower (``--fs 300``), and at least ``f0`` (``--f0 250``): a default follows the options given."""
+def default_f_max(f0: float, fs: float, ceiling: float = DEFAULT_F_MAX) -> float:
+    """The default highest line (Hz): ``ceiling`` (200 Hz), or the highest harmonic of ``f0`` below ``fs/2`` when
+    that is lower (``--fs 300``), and at least ``f0`` (``--f0 250``): a default follows the options given."""
     if not (np.isfinite(f0) and f0 > 0 and np.isfinite(fs) and fs > 0):
-        return DEFAULT_F_MAX  # the library names the bad value
+        return ceiling  # the library names the bad value
     top = np.ceil(fs / 2 / f0) - 1  # harmonics strictly below Nyquist
-    return float(f0 * max(1.0, min(np.floor(DEFAULT_F_MAX / f0 + 1e-9), top)))
+    return float(f0 * max(1.0, min(np.floor(ceiling / f0 + 1e-9), top)))
 
 
 def default_at(freq: np.ndarray) -> np.ndarray:
