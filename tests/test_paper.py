@@ -179,8 +179,8 @@ def test_run_sweep_and_identify_commands(tmp_path) -> None:
     [
         (["run", "--mass", "-1"], "mass must be a finite number > 0"),
         (["run", "--kp", "300"], "closed loop is unstable"),
-        (["run", "--f0", "3"], "fs/f0 must be a whole number"),
-        (["identify", "missing.csv"], "path must be an existing file"),
+        (["run", "--f0", "3"], "--fs/--f0 must be a whole number"),
+        (["identify", "missing.csv"], "the recording 'missing.csv' does not exist"),
         (["sweep", "--periods", "3"], "give at least one of --kp, --ki, --kd"),
         (["sweep", "--kp", "2000", "--out", "x.txt"], "--out must end in .nc, .npz, .csv, got 'x.txt'"),
     ],

@@ -176,21 +176,48 @@ class SweepResult(ArrayRecord):
 
     def save(self, path: str | Path) -> None:
         """Write atomically to ``.nc`` (NetCDF through h5netcdf; H as real and imaginary parts;
-        fletcher32 and a SHA-256 checked by :func:`load_sweep`) or ``.npz`` (zip CRC-32 per array)."""
+        fletcher32 and a SHA-256 checked by :func:`load_sweep`), ``.npz`` (zip CRC-32 per array) or ``.csv``
+        (for other tools: one row per point and line, see :meth:`to_csv`; :func:`load_sweep` reads the
+        other two)."""
         from .io import atomic_path
         from .io._netcdf import write_sweep_netcdf
 
         path = Path(path)
-        if path.suffix == ".nc":
+        suffix = path.suffix.lower()
+        if suffix == ".nc":
             write_sweep_netcdf(self, path)
-        elif path.suffix == ".npz":
+        elif suffix == ".npz":
             arrays = {name: getattr(self, name) for name in _ARRAYS}
             arrays |= {f"point_{k}": v for k, v in self.points.items()} | {f"axis_{k}": v for k, v in self.axes.items()}
             header = {"grid": self.grid, "periods": self.periods, "blocks": self.blocks, "meta": self.meta}
             with atomic_path(path) as target, open(target, "wb") as handle:
                 np.savez_compressed(handle, header=json.dumps(header), **arrays)
+        elif suffix == ".csv":
+            self.to_csv(path)
         else:
-            raise ValueError(f"path must end in .nc or .npz, got {str(path)!r}")
+            raise ValueError(f"path must end in .nc, .npz or .csv, got {str(path)!r}")
+
+    def to_csv(self, path: str | Path) -> None:
+        """Write a CSV atomically: a header row, then one row per point and line (the swept parameters, status,
+        ``freq_Hz``, ``k_N_per_m``, ``c_Ns_per_m``, ``k_std_N_per_m``, ``c_std_Ns_per_m``,
+        ``receptance_abs_m_per_N`` = abs(Y/F) = 1/abs(H)); NaN in the estimates of points whose status is not ok;
+        the metadata (version, rig, controller, seed) in trailing ``#`` lines."""
+        from .io import atomic_path
+        from .io._results import trailer
+
+        names = list(self.points)
+        header = [*names, "status", "freq_Hz", "k_N_per_m", "c_Ns_per_m", "k_std_N_per_m", "c_std_Ns_per_m",
+                  "receptance_abs_m_per_N"]  # fmt: skip
+        with np.errstate(invalid="ignore"):  # NaN rows of points that are not ok: NaN is their documented value
+            receptance = np.abs(1 / self.H)
+        with atomic_path(Path(path)) as target, target.open("w") as handle:
+            handle.write(",".join(header) + "\n")
+            for i in range(self.status.size):
+                for j, f in enumerate(self.freq):
+                    row = [*[self.points[n][i] for n in names], self.status[i], f, self.k[i, j], self.c[i, j],
+                           self.k_std[i, j], self.c_std[i, j], receptance[i, j]]  # fmt: skip
+                    handle.write(",".join(str(v) for v in row) + "\n")
+            handle.write(trailer(self.meta))
 
 
 def save_netcdf_with_xarray(result: SweepResult, path: Path) -> None:
@@ -249,6 +276,11 @@ def load_sweep(path: str | Path) -> SweepResult:
         points = {k[6:]: f[k] for k in f if k.startswith("point_")}
         axes = {k[5:]: f[k] for k in f if k.startswith("axis_")}
         return SweepResult(points=points, axes=axes, **arrays, **header)
+    if path.suffix == ".csv":
+        raise ValueError(
+            f"path must end in .nc or .npz, got {str(path)!r} (a sweep's .csv is for other tools: "
+            "it keeps no complex H or seeds; save .nc or .npz to load it back)"
+        )
     if path.suffix != ".nc":
         raise ValueError(f"path must end in .nc or .npz, got {str(path)!r}")
     ds = read_netcdf(path)  # refuses a file whose checksums do not match

@@ -25,8 +25,6 @@ import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
-import numpy as np
-
 from .._errors import TouchdownError
 from ..io._results import version
 from ..two_axis import add_two_axis_options
@@ -37,13 +35,19 @@ from ._commands import (
     cmd_sweep,
 )
 from ._options import (
+    IDENTIFY_OPTION_NAMES,
+    MODEL_OPTION_NAMES,
     PID_OPTIONS,
     UsageError,
     _add_model_options,
     _Parser,
     _values,
+    cli_text,
 )
 from ._rotor import add_rotor_parser
+
+AT_HELP = ("lines to tabulate (Hz, 'a,b,c'); default 10,40,100,200, or four lines spread over the band when it "
+           "does not hold them")  # fmt: skip
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -69,29 +73,34 @@ def build_parser() -> argparse.ArgumentParser:
     paper.add_argument("--out", type=Path, default=Path("paper-output"), help="output folder (default paper-output)")
     paper.add_argument("--seed", type=int, default=2026, help="seed of the measurement noise")
     paper.add_argument("--no-progress", action="store_true", help="no progress lines")
-    paper.set_defaults(func=cmd_paper)
+    paper.set_defaults(func=cmd_paper, option_names={})
 
     run = sub.add_parser("run", allow_abbrev=False, parents=[common], help="one SPHS experiment; prints a summary")
     _add_model_options(run)
-    run.add_argument("--at", type=_values, default=np.array([10.0, 40.0, 100.0, 200.0]),
-                     help="lines to tabulate (Hz, 'a,b,c'; default 10,40,100,200)")  # fmt: skip
+    run.add_argument("--at", type=_values, help=AT_HELP)
     run.add_argument("--save", type=Path, help="write the estimate (.csv or .nc; load with amb_fast.load_estimate; "
                      "with --two-axis .csv or .npz)")  # fmt: skip
     run.add_argument("--figure", type=Path, help="write a figure (.png, .pdf or .svg)")
     add_two_axis_options(run)
-    run.set_defaults(func=cmd_run)
+    run.set_defaults(func=cmd_run, option_names=MODEL_OPTION_NAMES)
 
-    sw = sub.add_parser("sweep", allow_abbrev=False, parents=[common], help="a gain grid to NetCDF (.nc), .npz or CSV")
+    sw = sub.add_parser("sweep", allow_abbrev=False, parents=[common],
+                        help="a grid of gains, rig fields or controller parameters to .nc, .npz or .csv")  # fmt: skip
     _add_model_options(sw, gains=False)
     for name, (_, unit, text) in list(PID_OPTIONS.items())[:3]:
         sw.add_argument(f"--{name}", type=_values, help=f"{text} values ({unit}): 'a,b,c' or 'start:stop:count'")
+    sw.add_argument("--vary", action="append", default=[], metavar="NAME=VALUES",
+                    help="sweep any rig field or controller parameter, as amb_fast.sweep does: a Rig field "
+                    "(amp_bandwidth, kyy, mass_loading, ...), derivative_cutoff, or a --controller file's parameter "
+                    "(notch_freq, ...), in its unit (Hz, N/m, kg, ...); VALUES 'a,b,c' or 'start:stop:count'; "
+                    "repeat it for more axes")  # fmt: skip
     sw.add_argument("--grid", choices=["product", "zip"], default="product", help="cross the values or pair them")
     sw.add_argument("--workers", type=int, help="threads (default: all cores)")
     sw.add_argument(
         "--out", default="sweep.nc", help="output file: .nc (needs amb_fast[xarray]), .npz or .csv (default sweep.nc)"
     )
     sw.add_argument("--no-progress", action="store_true", help="no progress bar")
-    sw.set_defaults(func=cmd_sweep)
+    sw.set_defaults(func=cmd_sweep, option_names=MODEL_OPTION_NAMES)
 
     ident = sub.add_parser(
         "identify",
@@ -110,14 +119,24 @@ def build_parser() -> argparse.ArgumentParser:
         default="displacement",
         help="displacement channel: name or 0-based column index (m, or a unit in its name)",
     )
+    ident.add_argument("--time", metavar="NAME|INDEX",
+                       help="time column (s, or ms/us by its unit): name or 0-based index; 'none' to ignore it "
+                       "(default: the reader's time column)")  # fmt: skip
     ident.add_argument("--recording", help="which recording of a file that holds several (dSPACE export, TDMS group)")
     ident.add_argument(
         "--fs", type=float, help="sampling frequency (Hz; default: from 'fs' or the time column, which it must match)"
     )
     ident.add_argument("--clearance", type=float, help="mechanical clearance (m): warn if the displacement exceeds it")
     ident.add_argument("--f0", type=float, default=1.0, help="fundamental (Hz; default 1)")
-    ident.add_argument("--mass", type=float, default=0.92, help="known moving mass (kg; default 0.92)")
+    ident.add_argument("--mass", type=float, help="known moving mass of paper eq. 9 (kg); needed unless the file "
+                       "records it (a file amb_fast wrote)")  # fmt: skip
     ident.add_argument("--f-max", type=float, help="highest excited line (Hz; default: detected from the force)")
+    ident.add_argument(
+        "--lines",
+        type=_values,
+        metavar="F1,F2,...",
+        help="take exactly these lines (Hz, multiples of --f0; 'a,b,c' or 'start:stop:count')",
+    )
     ident.add_argument(
         "--settle-periods",
         type=int,
@@ -125,8 +144,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="periods to skip at the start (a warning says when a transient is left in)",
     )
     ident.add_argument("--median-window", type=int, default=5, help="median filter width (lines, odd)")
-    ident.add_argument("--out", type=Path, default=Path("identify-output"), help="output folder")
-    ident.set_defaults(func=cmd_identify)
+    ident.add_argument("--at", type=_values, help=AT_HELP)
+    ident.add_argument("--figure", type=Path, help="write the figure here (.png, .pdf or .svg) instead of "
+                       "OUT/estimate.png")  # fmt: skip
+    ident.add_argument("--out", type=Path, default=Path("identify-output"), help="output folder (estimate.csv, "
+                       "estimate.png)")  # fmt: skip
+    ident.set_defaults(func=cmd_identify, option_names=IDENTIFY_OPTION_NAMES)
 
     from ..calibration._cli import add_design_parser, add_fit_parser
 
@@ -136,10 +159,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _one_line(
-    message: Warning | str, category: type[Warning], filename: str, lineno: int, file=None, line=None
-) -> None:  # noqa: ANN001
-    print(f"amb-fast: warning: {message}", file=sys.stderr)
+def _one_line(names: dict[str, str]):  # noqa: ANN202
+    """``warnings.showwarning`` printing one line, with the library's parameter names as the command's options."""
+
+    def show(message: Warning | str, category: type[Warning], filename: str, lineno: int, file=None,
+             line=None) -> None:  # noqa: ANN001  # fmt: skip
+        text = " ".join(str(message).split())
+        print(f"amb-fast: warning: {cli_text(text, names)}", file=sys.stderr)
+
+    return show
 
 
 EXPECTED = (UsageError, ValueError, OSError, ImportError, TouchdownError, OverflowError, MemoryError)
@@ -168,7 +196,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         with warnings.catch_warnings():  # a warning is one line on stderr, whatever the interpreter's filters
             warnings.simplefilter("default", UserWarning)
-            warnings.showwarning = _one_line
+            warnings.showwarning = _one_line(getattr(args, "option_names", {}))
             args.func(args)
     except KeyboardInterrupt:
         print("amb-fast: interrupted", file=sys.stderr)
@@ -179,6 +207,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         status = 2 if args.phase == "check" else 1
         if isinstance(error, EXPECTED):
             text = " ".join(str(error).split()) or type(error).__name__
+            if not isinstance(error, UsageError):  # the library's words: its parameter names become options
+                text = cli_text(text, getattr(args, "option_names", {}))
             print(f"amb-fast: error: {text}", file=sys.stderr)
         else:
             print(f"amb-fast: error: internal error {type(error).__name__}: {error} (please report it; --debug shows "

@@ -4,6 +4,7 @@ model they build."""
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from collections.abc import Sequence
 from dataclasses import replace
@@ -122,12 +123,18 @@ def _number_or_none(text: str) -> float | None:
 
 
 def _values(text: str) -> np.ndarray:
-    """'1,2,3' or 'start:stop:count' (inclusive, evenly spaced)."""
+    """'1,2,3' or 'start:stop:count' (inclusive, evenly spaced); an empty item ('2000,,3000') is refused,
+    not skipped: it is a typo, and the grid would silently lose a point."""
     try:
         if ":" in text:
             start, stop, count = text.split(":")
+            if int(count) < 1:
+                raise argparse.ArgumentTypeError(f"'start:stop:count' needs a count >= 1, got {text!r}")
             return np.linspace(float(start), float(stop), int(count))
-        return np.array([float(v) for v in text.split(",") if v.strip()])
+        items = text.split(",")
+        if any(not item.strip() for item in items):
+            raise argparse.ArgumentTypeError(f"an empty value in {text!r}: expected 'a,b,c' or 'start:stop:count'")
+        return np.array([float(v) for v in items])
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected 'a,b,c' or 'start:stop:count', got {text!r}") from None
 
@@ -151,7 +158,8 @@ def _add_model_options(parser: argparse.ArgumentParser, gains: bool = True) -> N
     pid.add_argument("--controller", type=Path, metavar="FILE", help=text)
     ex = parser.add_argument_group("excitation and experiment")
     ex.add_argument("--f0", type=float, default=1.0, help="fundamental of the SPHS (Hz; default 1)")
-    ex.add_argument("--f-max", type=float, default=200.0, help="highest line (Hz; default 200)")
+    ex.add_argument("--f-max", type=float, help=f"highest line (Hz; default {DEFAULT_F_MAX:g}, or the highest "
+                    "harmonic of --f0 below --fs/2 when that is lower)")  # fmt: skip
     ex.add_argument("--rms", type=float, default=1.0, help="excitation rms (N; default 1)")
     ex.add_argument("--lines", choices=["all", "odd", "random-odd"], default="all", help="which harmonics to excite")
     ex.add_argument("--periods", type=int, default=10, help="periods averaged (default 10)")
@@ -182,5 +190,85 @@ def _model(args: argparse.Namespace, *, gains: bool = True) -> tuple[Rig, AnyCon
     return rig, load_controller(args.controller)
 
 
+DEFAULT_F_MAX = 200.0  # Hz: the paper's band
+DEFAULT_AT = (10.0, 40.0, 100.0, 200.0)  # Hz: the paper's table
+
+
+def default_f_max(f0: float, fs: float, ceiling: float = DEFAULT_F_MAX) -> float:
+    """The default highest line (Hz): ``ceiling`` (200 Hz), or the highest harmonic of ``f0`` below ``fs/2`` when
+    that is lower (``--fs 300``), and at least ``f0`` (``--f0 250``): a default follows the options given."""
+    if not (np.isfinite(f0) and f0 > 0 and np.isfinite(fs) and fs > 0):
+        return ceiling  # the library names the bad value
+    top = np.ceil(fs / 2 / f0) - 1  # harmonics strictly below Nyquist
+    return float(f0 * max(1.0, min(np.floor(ceiling / f0 + 1e-9), top)))
+
+
+def default_at(freq: np.ndarray) -> np.ndarray:
+    """The lines (Hz) a table shows by default: 10, 40, 100 and 200 Hz when the band holds them all, else four
+    excited lines spread evenly (logarithmically) over the band, so a default never falls outside it."""
+    if freq[0] <= min(DEFAULT_AT) and max(DEFAULT_AT) <= freq[-1]:
+        return np.array(DEFAULT_AT)
+    wanted = np.geomspace(freq[0], freq[-1], 4)
+    return np.unique(freq[[int(np.argmin(np.abs(freq - f))) for f in wanted]])
+
+
+def check_at(at: np.ndarray, freq: np.ndarray) -> None:
+    """Refuse ``--at`` values the user gave outside the excited band."""
+    outside = [float(f) for f in at if not freq[0] <= f <= freq[-1]]
+    if outside:
+        raise UsageError(f"--at must be within the excited band {freq[0]:g}-{freq[-1]:g} Hz, got {outside}")
+
+
 def _excitation(args: argparse.Namespace, pid: AnyController):  # noqa: ANN202
-    return schroeder_multisine(f0=args.f0, f_max=args.f_max, fs=pid.fs, rms=args.rms, lines=args.lines, seed=args.seed)
+    f_max = default_f_max(args.f0, pid.fs) if args.f_max is None else args.f_max
+    return schroeder_multisine(f0=args.f0, f_max=f_max, fs=pid.fs, rms=args.rms, lines=args.lines, seed=args.seed)
+
+
+# -- the library's messages in the command's words -------------------------------------------------------------
+
+#: Python keyword argument -> the option that sets it, per command: the one place where the library's
+#: parameter names (``settle_periods``, ``fs``) become options (``--settle-periods``, ``--fs``) in messages.
+MODEL_OPTION_NAMES = {field: f"--{option}" for option, (field, _, _) in {**RIG_OPTIONS, **PID_OPTIONS}.items()} | {
+    "f0": "--f0", "f_max": "--f-max", "rms": "--rms", "periods": "--periods", "settle_periods": "--settle-periods",
+    "seed": "--seed", "delay": "--delay", "force_law": "--force-law", "workers": "--workers", "grid": "--grid",
+}  # fmt: skip
+IDENTIFY_OPTION_NAMES = {
+    "fs": "--fs", "f0": "--f0", "f_max": "--f-max", "mass": "--mass", "settle_periods": "--settle-periods",
+    "median_window": "--median-window", "clearance": "--clearance", "recording": "--recording", "time": "--time",
+    "lines": "--lines", "path": "FILE",
+}  # fmt: skip
+#: Names that also stand for the data ("force must be finite" is about the samples, "time must be increasing"
+#: about the column): only ``name=`` is taken for an option.
+_DATA = frozenset({"time", "force", "displacement", "path"})
+
+
+def cli_text(text: str, names: dict[str, str]) -> str:
+    """``text`` with the library's parameter names replaced by the options in ``names``: ``name=`` anywhere
+    (``pass fs=`` -> ``pass --fs``, ``time=None`` -> ``--time none``); a name with an underscore anywhere as a
+    word; other names where they stand in an ``a/b`` pair (``fs/f0 must be``) or precede ``must`` or a
+    number in parentheses. A hint in both spellings, ``(A; on the command line B)``, keeps the command's half."""
+
+    def one_spelling(match: re.Match) -> str:  # "(force=1; on the command line --force 1)" -> "(--force 1)"
+        python, command = match.group(1), match.group(2)
+        return f"({command})" if "=" in python else f"({python})"  # "pass fs= (Hz; ...)": fs= becomes --fs
+
+    def swap(match: re.Match) -> str:
+        name, equals = match.group("name"), match.group("equals")
+        if name not in names:
+            return match.group(0)
+        if equals is not None:  # "recording=NAME" -> "--recording NAME", "time=None" -> "--time none"
+            value = equals[1:]
+            return names[name] + (" " + ("none" if value == "None" else value) if value else "")
+        if name in _DATA:
+            return match.group(0)
+        start, end = match.start(), match.end()
+        leads = (
+            (start > 0 and text[start - 1] == "/")
+            or text.startswith(("/", " must"), end)
+            or re.match(r" \(-?\d", text[end:]) is not None
+        )  # "at least f0 (1.0 Hz)", not "the wrong lines (pass"
+        return names[name] if "_" in name or leads else match.group(0)
+
+    text = re.sub(r"\(([^();]*); on the command line ([^()]*)\)", one_spelling, text)
+    return re.sub(r"(?<![\w\-'\".])(?P<name>[A-Za-z_][A-Za-z0-9_]*)(?P<equals>=(?:None|[A-Z]+)?)?(?![\w'\"])", swap,
+                  text)  # fmt: skip

@@ -10,9 +10,19 @@ from typing import Any
 import numpy as np
 
 from .._excitation import schroeder_multisine
+from .._validate import integer
 from ..system import RotorRig, campbell, measure_sensitivity, unbalance_response
 from ..system._file import load_rotor
-from ._options import FIGURE_SUFFIXES, UsageError, _needs, _save_figure, _started, _values, check_output
+from ._options import (
+    FIGURE_SUFFIXES,
+    UsageError,
+    _needs,
+    _save_figure,
+    _started,
+    _values,
+    check_output,
+    default_f_max,
+)
 
 
 def add_rotor_parser(subparsers: Any, parents: list[argparse.ArgumentParser]) -> None:
@@ -52,6 +62,8 @@ def cmd_rotor(args: argparse.Namespace) -> None:
     speeds: np.ndarray = args.speeds if args.speeds is not None else defaults.get(args.step, np.zeros(1))
     if speeds.size == 0 or not np.all(np.isfinite(speeds)):
         raise UsageError(f"--speeds must be finite speeds in rad/s, got {args.speeds}")
+    if args.step == "sensitivity":  # options are mistakes before the run (exit status 2), not failed runs
+        integer("--periods", args.periods, 2)
     _started(args)
     meta = {"command": f"rotor {args.step}", "rotor": str(args.rotor or "RotorRig.example()")}
     if args.step == "campbell":
@@ -80,9 +92,10 @@ def _campbell(rig: RotorRig, pid: Any, speeds: np.ndarray, args: argparse.Namesp
 def _sensitivity(rig: RotorRig, pid: Any, args: argparse.Namespace) -> None:
     if args.speeds is not None:
         rig = rig.at_speed(float(args.speeds[0]))
-    sphs = schroeder_multisine(f0=2.0, f_max=1000.0, rms=1e-6, fs=pid.fs)
+    # 2-1000 Hz, or up to the highest line below the controller's fs/2 when that is lower (a default follows fs)
+    sphs = schroeder_multisine(f0=2.0, f_max=default_f_max(2.0, pid.fs, 1000.0), rms=1e-6, fs=pid.fs)
     measured = measure_sensitivity(rig, pid, sphs, periods=args.periods, seed=args.seed)
-    print(f"ISO 14839-3 sensitivity at {rig.rotor.speed:g} rad/s (test signal 1 um rms, 2-1000 Hz, "
+    print(f"ISO 14839-3 sensitivity at {rig.rotor.speed:g} rad/s (test signal 1 um rms, 2-{sphs.freq[-1]:g} Hz, "
           f"{args.periods} periods): zones A/B, B/C, C/D at 3, 4, 5 (9.5, 12, 14 dB)")  # fmt: skip
     print(measured.table())
 
