@@ -163,9 +163,15 @@ def cmd_identify(args: argparse.Namespace) -> None:
     rec = load_recording(args.file, force=_channel(args.force), displacement=_channel(args.displacement), fs=args.fs,
                          recording=args.recording)  # fmt: skip
     _started(args)
-    estimate = identify(rec.force, rec.displacement, fs=rec.fs, f0=args.f0, mass=args.mass, f_max=args.f_max,
-                        settle_periods=args.settle_periods, median_window=args.median_window,
-                        clearance=args.clearance)  # fmt: skip
+    try:
+        estimate = identify(rec.force, rec.displacement, fs=rec.fs, f0=args.f0, mass=args.mass, f_max=args.f_max,
+                            settle_periods=args.settle_periods, median_window=args.median_window,
+                            clearance=args.clearance)  # fmt: skip
+    except ValueError as error:  # a refused fs says where it came from (the file's clock, or --fs)
+        if "fs" not in str(error):
+            raise
+        error.args = (f"{error}; {rec.fs_note()}",)
+        raise
     print(f"{args.file}: {rec.force.size} samples at {rec.fs:g} Hz, {estimate.periods} periods, "
           f"{estimate.freq.size} lines from {estimate.freq[0]:g} to {estimate.freq[-1]:g} Hz")  # fmt: skip
     if estimate.weak is not None and estimate.weak.any():

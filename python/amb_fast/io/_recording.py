@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike
 from .._equality import ArrayRecord
 from .._validate import real, require, series
 from ._atomic import atomic_write
-from ._channels import _agree, _channel, _choose_recording, _file_fs, _scale
+from ._channels import _agree, _channel, _choose_recording, _file_fs, _scale, fs_origin, scaled
 from ._mat import _read_mat
 from ._tdms import _read_tdms
 from ._text import _load_text
@@ -37,13 +37,22 @@ class Recording(ArrayRecord):
     fs : float
         Sampling frequency, Hz.
     source : str
-        Where they came from: file, recording and channel names with the units they were scaled from.
+        Where they came from: file, recording and channel names with the units they were scaled from
+        (``'Displacement [um]' (um -> m)``) and where fs came from.
+    fs_from : str
+        Where ``fs`` came from, for messages: ``"the time column 'Time [s]' of rig.csv"``, ``"the 'fs'
+        variable of rig.mat"`` or ``"fs= (given)"``. See :meth:`fs_note`.
     """
 
     force: np.ndarray
     displacement: np.ndarray
     fs: float
     source: str = ""
+    fs_from: str = ""
+
+    def fs_note(self) -> str:
+        """``"fs 4000.1 Hz (from the time column 'Time [s]' of rig.csv)"``: to add to an error about fs or f0."""
+        return f"fs {self.fs:.10g} Hz" + (f" (from {self.fs_from})" if self.fs_from else "")
 
 
 def save_recording(
@@ -132,8 +141,9 @@ def load_recording(
     f_values = f_values * _scale(f_name, "force", path)
     y_values = y_values * _scale(y_name, "displacement", path)
     found, origin = _file_fs(channels, time, path)
-    fs = _agree(fs, found, path, origin)
+    fs = _agree(fs, found, path, origin, list(channels))
     where = f"{path.name}" + (f" recording {name!r}" if name else "")
     clock = f"; fs {fs:.10g} Hz from its {origin}" if found is not None else f"; fs {fs:.10g} Hz given"
     return Recording(series("force", f_values), series("displacement", y_values), fs,
-                     f"{where}: force {f_name!r}, displacement {y_name!r}{clock}")  # fmt: skip
+                     f"{where}: force {scaled(f_name, 'force')}, displacement {scaled(y_name, 'displacement')}{clock}",
+                     fs_origin(found, origin, path, name))  # fmt: skip
