@@ -82,3 +82,15 @@ def test_a_refused_fs_says_it_came_from_the_time_column(tmp_path, capsys) -> Non
     assert status != 0  # 1 today; exit 2 for an input file's mistake is case 9 (another branch)
     assert "fs/f0 must be a whole number of samples per period" in err
     assert "(from the time column 'Time [s]' of drift.csv)" in err
+
+
+def test_an_absolute_clock_gives_fs_to_its_digits(tmp_path) -> None:
+    """Unix timestamps (1.7e9 s, written %.6f; 2 s at 4 kHz): the fit on t - t[0] gives 4000 Hz (was 3999.998:
+    the offset swamped the least-squares sum)."""
+    t = np.arange(8000) / FS
+    f, y = np.sin(2 * np.pi * 10 * t), 1e-5 * np.cos(2 * np.pi * 10 * t)
+    path = tmp_path / "unix.csv"
+    write(path, "timestamp,force,displacement", [1.7e9 + t, f, y], ["%.6f", "%.17g", "%.17g"])
+    rec = af.load_recording(path)
+    assert rec.fs == FS
+    assert rec.fs_from == "the time column 'timestamp' of unix.csv"

@@ -148,12 +148,19 @@ BLOCK = 1 << 13  # samples per block of the time column's checks: their temporar
 
 
 def _quantum(t: np.ndarray) -> float:
-    """The resolution the times were written with (``%.4f``: 1e-4), 0 if they look unrounded."""
+    """The resolution the times were written with (``%.4f``: 1e-4), 0 if they look unrounded.
+
+    Judged on the times from the first one, with the float spacing of the largest time allowed for (absolute
+    clocks such as Unix timestamps carry it: 2.4e-7 s at 1.7e9 s)."""
+    t0, spacing = float(t[0]), float(np.spacing(max(abs(float(t[0])), abs(float(t[-1])))))
     for digits in range(0, 10):
         ok = True
+        tolerance = 1e-6 + 4.0 * spacing * 10.0**digits
+        if tolerance > 1e-2:  # digits finer than the floats resolve
+            return 0.0
         for a in range(0, t.size, BLOCK):
-            x = t[a : a + BLOCK] * 10.0**digits
-            if float(np.max(np.abs(x))) >= 1e15 or float(np.max(np.abs(x - np.rint(x)))) >= 1e-6:
+            x = (t[a : a + BLOCK] - t0) * 10.0**digits
+            if float(np.max(np.abs(x))) >= 1e15 or float(np.max(np.abs(x - np.rint(x)))) >= tolerance:
                 ok = False
                 break
         if ok:
@@ -174,13 +181,15 @@ def fs_from_time(t: np.ndarray, path: Path, name: str, scale: float) -> float:
     n = t.size
     require(n >= 2 and bool(np.all(np.isfinite(t))), "time", f"column {name!r} of {path.name}",
             "at least two finite times to give fs")  # fmt: skip
-    middle, mean = (n - 1) / 2.0, float(t.mean())
+    middle, t0 = (n - 1) / 2.0, float(t[0])
+    mean = t0 + sum(float(np.sum(t[a : a + BLOCK] - t0)) for a in range(0, n, BLOCK)) / n
 
     def k(a: int) -> np.ndarray:
         return np.arange(a, min(a + BLOCK, n)) - middle
 
-    # Least squares over k = 0..n-1 centred: step = sum k t / sum k^2 (sum k = 0).
-    step = sum(float(k(a) @ t[a : a + BLOCK]) for a in range(0, n, BLOCK)) / (n * (n * n - 1.0) / 12.0)
+    # Least squares over k = 0..n-1 centred: step = sum k t / sum k^2 (sum k = 0), on t - t[0]: an absolute
+    # clock's offset (Unix time, 1.7e9 s) would otherwise swamp the sum (fs 3999.998 Hz for 4000).
+    step = sum(float(k(a) @ (t[a : a + BLOCK] - t0)) for a in range(0, n, BLOCK)) / (n * (n * n - 1.0) / 12.0)
     require(step > 0, "time", f"column {name!r} of {path.name}", "increasing to give fs")
     quantum = _quantum(t)
     row = -1
@@ -202,7 +211,8 @@ def fs_from_time(t: np.ndarray, path: Path, name: str, scale: float) -> float:
                          "the column with time=None and pass fs= (Hz; on the command line --fs)")  # fmt: skip
     fs = 1.0 / (step * scale)
     # The fit's uncertainty with the times rounded to `quantum` (uniform errors): about q / n^1.5 in the step.
-    spread = 3.0 * max(quantum, 1e-15 * max(abs(float(t[0])), abs(float(t[-1])))) / n**1.5 / step * fs
+    spacing = float(np.spacing(max(abs(float(t[0])), abs(float(t[-1])))))
+    spread = 3.0 * max(quantum, 4.0 * spacing) / n**1.5 / step * fs
     for decimals in range(-int(np.floor(np.log10(fs))), 12):
         candidate = round(fs, decimals)
         if abs(candidate - fs) <= spread:
