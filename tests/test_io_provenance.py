@@ -43,7 +43,8 @@ def test_no_time_column_lists_the_columns_and_names_the_time_option(tmp_path, sh
     path = tmp_path / "clock.csv"
     write(path, "stamp_s,force,displacement", [t, f, y], ["%.6f", "%.17g", "%.17g"])
     with pytest.raises(ValueError, match=r"clock.csv has neither 'fs' nor a time column \(its columns are 0: "
-                       r"'stamp_s', 1: 'force', 2: 'displacement'\): pass fs= .*time=NAME or its 0-based index"):  # fmt: skip
+                       r"'stamp_s', 1: 'force', 2: 'displacement'\): pass fs= .*time=NAME or its 0-based "
+                       r"index"):  # fmt: skip
         af.load_recording(path)
     rec = af.load_recording(path, time="stamp")  # the unit suffix _s left out
     assert rec.fs == FS and rec.fs_from == "the time column 'stamp_s' of clock.csv"

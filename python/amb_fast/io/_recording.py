@@ -121,7 +121,24 @@ def load_recording(
         Which recording of a file that holds several (dSPACE exports, TDMS groups). Required then:
         channels of different recordings are never mixed.
     time : str or int or None
-        The time column (s, or ``ms``/``us`` by its unit), used for fs and checked to be uniform.
+        The time column, by name or 0-based index. The default ``"time"`` also finds the usual names of a
+        time column (``Time [s]``, ``TIME``, ``t [ms]``, ``Zeit``, ``timestamp``, LabVIEW's ``X_Value``);
+        two such columns are an error naming both. Its unit (s, ms, us) scales it. fs is the clock fitted
+        by least squares over the whole column: a clock rounded to its printed digits is uniform (``%.4f``
+        at 4 kHz gives 4000 Hz), a gap, repeat or restart is refused naming the row. ``None`` ignores any
+        time column (then ``fs`` is needed). On the command line: ``--time``.
+
+    Returns
+    -------
+    Recording
+        The channels in N and m, fs, and where they came from (``source``, ``fs_from``).
+
+    Raises
+    ------
+    ValueError
+        A channel or time column not found (the message lists the file's columns with their indices),
+        ambiguous, in a unit that is not a force/length/time, a non-uniform clock, ``fs`` disagreeing with
+        the file's, or neither ``fs`` nor a time column.
     """
     path = Path(path)
     require(path.is_file(), "path", str(path), "an existing file")

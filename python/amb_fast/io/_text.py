@@ -132,8 +132,9 @@ def _load_text(
     except ValueError as error:
         if headerless:
             raise ValueError(f"{path.name} has no header row naming its {len(names)} columns: choose the force and "
-                             "the displacement by 0-based index (force=1, displacement=2, and the time column, if "
-                             "any, time=0; on the command line --force 1 --displacement 2 --time 0)") from error  # fmt: skip
+                             "the displacement by 0-based index (force=1, displacement=2, and the time column, "
+                             "if any, time=0; on the command line --force 1 --displacement 2 --time 0)") \
+                from error  # fmt: skip
         raise
     f_name, y_name = names[columns[0]], names[columns[1]]
     t_index = None if headerless and not isinstance(time, int) else _time_index(names, time, path)
