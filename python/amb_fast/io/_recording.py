@@ -22,7 +22,7 @@ from ._mat import _read_mat
 from ._tdms import _read_tdms
 from ._text import _load_text
 
-SUFFIXES = (".csv", ".tsv", ".txt", ".mat", ".tdms")
+SUFFIXES = (".csv", ".tsv", ".txt", ".mat", ".tdms", ".lvm", ".dat")  # .lvm: LabVIEW, .dat: DAQs' text exports
 CHUNK_LINES = 1 << 16  # rows per chunk when writing
 
 
@@ -104,8 +104,10 @@ def load_recording(
 ) -> Recording:
     """Read force and displacement channels from a rig's file.
 
-    Formats: CSV/TSV/``.txt`` (``,``, ``;``, tab or blank separated; quoted headers; an optional units
-    row; decimal commas; ``#`` comment lines), MATLAB ``.mat`` v4-v7 (scipy) and v7.3 (HDF5, needs h5py)
+    Formats: CSV/TSV/``.txt``/``.dat`` and LabVIEW's ``.lvm`` (``,``, ``;``, tab or blank separated;
+    quoted headers; an optional units row; decimal commas; ``#`` comment lines; metadata lines before
+    the header, such as LabVIEW's ``***End_of_Header***`` blocks, skipped; no header: columns by index),
+    MATLAB ``.mat`` v4-v7 (scipy) and v7.3 (HDF5, needs h5py)
     with top-level variables or dSPACE ControlDesk/TRACE exports (a struct with ``X.Data`` for time
     and ``Y(k).Name`` / ``Y(k).Data`` per channel), and NI ``.tdms`` (needs ``amb_fast[tdms]``; each
     group is a recording). Text files are read in chunks, keeping only the chosen columns.
