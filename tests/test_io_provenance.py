@@ -95,3 +95,20 @@ def test_an_absolute_clock_gives_fs_to_its_digits(tmp_path) -> None:
     rec = af.load_recording(path)
     assert rec.fs == FS
     assert rec.fs_from == "the time column 'timestamp' of unix.csv"
+
+
+def test_tdms_channels_keep_their_indices_and_fs_names_wf_increment(tmp_path, short) -> None:
+    """The fs taken from wf_increment was inserted after the first channel: index 1 was 'fs', not the second
+    channel, and fs was said to come from an 'fs' variable."""
+    pytest.importorskip("nptdms")
+    from nptdms import ChannelObject, TdmsWriter
+
+    _, f, y = short
+    path = tmp_path / "shaker.tdms"
+    with TdmsWriter(path) as writer:
+        timing = {"wf_increment": 1 / FS}
+        writer.write_segment([ChannelObject("run", "Force", f, properties={"unit_string": "N", **timing}),
+                              ChannelObject("run", "Gap", y * 1e3, properties={"unit_string": "mm", **timing})])  # fmt: skip
+    rec = af.load_recording(path, force=0, displacement=1)
+    np.testing.assert_allclose(rec.displacement, y, rtol=1e-14)
+    assert rec.fs == FS and rec.fs_from == "the channels' wf_increment of shaker.tdms recording 'run'"

@@ -224,7 +224,8 @@ def _file_fs(channels: dict[str, np.ndarray], time: str | int | None, path: Path
     """fs (Hz) from a file's ``fs`` variable or its time column, and where it came from."""
     names = list(channels)
     if "fs" in channels:
-        return float(np.ravel(channels["fs"])[0]), "'fs' variable"
+        where = "channels' wf_increment" if path.suffix.lower() == ".tdms" else "'fs' variable"  # TDMS: the waveform's
+        return float(np.ravel(channels["fs"])[0]), where
     index = _time_index(names, time, path)
     if index is None:
         return None, ""
