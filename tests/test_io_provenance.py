@@ -107,8 +107,17 @@ def test_tdms_channels_keep_their_indices_and_fs_names_wf_increment(tmp_path, sh
     path = tmp_path / "shaker.tdms"
     with TdmsWriter(path) as writer:
         timing = {"wf_increment": 1 / FS}
-        writer.write_segment([ChannelObject("run", "Force", f, properties={"unit_string": "N", **timing}),
-                              ChannelObject("run", "Gap", y * 1e3, properties={"unit_string": "mm", **timing})])  # fmt: skip
+        force = ChannelObject("run", "Force", f, properties={"unit_string": "N", **timing})
+        writer.write_segment([force, ChannelObject("run", "Gap", y * 1e3, properties={"unit_string": "mm", **timing})])
     rec = af.load_recording(path, force=0, displacement=1)
     np.testing.assert_allclose(rec.displacement, y, rtol=1e-14)
     assert rec.fs == FS and rec.fs_from == "the channels' wf_increment of shaker.tdms recording 'run'"
+
+
+def test_channels_of_different_lengths_are_refused_naming_both(tmp_path, short) -> None:
+    """A .mat file's scalar 'fs' chosen by index as the displacement loaded as one sample (was: no error)."""
+    _, f, y = short
+    savemat(tmp_path / "r.mat", {"force": f, "fs": FS, "displacement": y})
+    with pytest.raises(ValueError, match=r"r.mat: the force 'force' has 800 samples and the displacement 'fs' 1: "
+                       r"choose two channels of the same recording"):  # fmt: skip
+        af.load_recording(tmp_path / "r.mat", force=0, displacement=1)

@@ -157,6 +157,10 @@ def load_recording(
     name, channels = _choose_recording(groups, path, recording, (force, displacement))
     f_name, f_values = _channel(channels, force, "force", path)
     y_name, y_values = _channel(channels, displacement, "displacement", path)
+    sizes = (np.size(f_values), np.size(y_values))
+    if sizes[0] != sizes[1] or sizes[0] < 2:  # a scalar (such as 'fs') chosen by index, or two recordings' channels
+        raise ValueError(f"{path.name}: the force {f_name!r} has {sizes[0]} samples and the displacement {y_name!r} "
+                         f"{sizes[1]}: choose two channels of the same recording, of at least 2 samples")  # fmt: skip
     f_values = f_values * _scale(f_name, "force", path)
     y_values = y_values * _scale(y_name, "displacement", path)
     found, origin = _file_fs(channels, time, path)
