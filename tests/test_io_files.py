@@ -128,3 +128,14 @@ def test_labviews_lvm_file_is_read_as_labview_writes_it(tmp_path, channels) -> N
     assert rec.fs == FS and rec.force.size == t.size
     np.testing.assert_array_equal(rec.force, f)
     assert rec.fs_from == "the time column 'X_Value' of run_07.lvm"
+
+
+def test_a_units_row_with_a_unit_amb_fast_does_not_scale_keeps_the_header(tmp_path, channels) -> None:
+    """A units row 's,V,um' was taken for the header (the header above it skipped as metadata, the columns
+    named 's', 'V', 'um'); now the header stays and the force in V is refused naming its unit."""
+    t, f, y = channels
+    path = tmp_path / "volts.csv"
+    write(path, "time,force,displacement\ns,V,um\n", [t, f, y * 1e6], ["%.6f", "%.17g", "%.17g"])
+    with pytest.raises(ValueError, match=r"the force channel 'force \[V\]' has unit 'V'; amb_fast needs one of N"):
+        af.load_recording(path)
+    assert af.io.sniff(path).names == ["time [s]", "force [V]", "displacement [um]"]

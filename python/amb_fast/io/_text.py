@@ -17,6 +17,10 @@ from .._validate import require
 from ._channels import UNITS, _agree, _index, _scale, _time_index, fs_from_time, fs_origin, scaled, split_unit
 
 CHUNK_BYTES = 1 << 16  # text per chunk when reading: bounds the memory beyond the two channels
+# Units a DAQ writes in a units row that amb_fast does not scale: recognised so the row is not taken for the
+# header (the header row above it would be lost), and a channel in one of them is refused naming its unit.
+OTHER_UNITS = frozenset({"v", "mv", "a", "ma", "g", "lbf", "in", "mil", "mils", "hz", "rpm", "pa", "bar", "%", "-",
+                         "°c", "degc", "k", "w", "rad", "deg", "m/s", "m/s^2", "m/s2"})  # fmt: skip
 WIDE = 16  # columns beyond which text is parsed by numpy (smaller buffers) even with pandas installed
 
 
@@ -101,7 +105,9 @@ def sniff(path: Path) -> _Dialect:
             # The header has the data's fields, or one more whose column is empty (LabVIEW's "Comment").
             before = [r[:width] for r in rows[max(0, start - 2) : start] if len(r) in (width, width + 1)]
             units_row = len(before) == 2 and all(
-                u.strip().strip("[]()").lower() in UNITS for u in before[1] if u.strip()
+                u.strip().strip("[]()").lower() in UNITS or u.strip().strip("[]()").lower() in OTHER_UNITS
+                for u in before[1]
+                if u.strip()
             )
             if units_row:  # a header, then a units row
                 names = [n.strip() for n in before[0]]
