@@ -107,3 +107,35 @@ def test_a_file_without_header_is_read_by_index_and_loses_no_sample(tmp_path, ch
     assert rec.force.size == t.size and rec.fs == FS
     np.testing.assert_array_equal(rec.force, f)
     assert af.load_recording(path, force=1, displacement=2, fs=FS).force[0] == f[0]  # the first row is data
+
+
+def test_labviews_lvm_file_is_read_as_labview_writes_it(tmp_path, channels) -> None:
+    """A .lvm file (was refused by its suffix): two header blocks each ending in ***End_of_Header***, decimal
+    commas, X_Value as the time column, an empty Comment column."""
+    t, f, y = channels
+    head = "\n".join([
+        "LabVIEW Measurement\t", "Writer_Version\t2\t", "Reader_Version\t2\t", "Separator\tTab\t",
+        "Decimal_Separator\t,\t", "Multi_Headings\tNo\t", "X_Columns\tOne\t", "Time_Pref\tRelative\t",
+        "Date\t2026/11/27\t", "Time\t01:00:00,0\t", "***End_of_Header***\t", "\t", "Channels\t2\t\t",
+        "Samples\t16000\t16000\t", "Y_Unit_Label\tNewtons\tMeters\t", "X_Dimension\tTime\tTime\t",
+        "X0\t0,0000000000000000E+0\t0,0000000000000000E+0\t", "Delta_X\t2,500000E-4\t2,500000E-4\t",
+        "***End_of_Header***\t\t\t", "X_Value\tForce\tDisplacement\tComment\n",
+    ])  # fmt: skip
+    rows = "\n".join(f"{a:.6f}\t{b:.17g}\t{c:.17g}".replace(".", ",") for a, b, c in zip(t, f, y))
+    path = tmp_path / "run_07.lvm"
+    path.write_text(head + rows + "\n")
+    rec = af.load_recording(path)
+    assert rec.fs == FS and rec.force.size == t.size
+    np.testing.assert_array_equal(rec.force, f)
+    assert rec.fs_from == "the time column 'X_Value' of run_07.lvm"
+
+
+def test_a_units_row_with_a_unit_amb_fast_does_not_scale_keeps_the_header(tmp_path, channels) -> None:
+    """A units row 's,V,um' was taken for the header (the header above it skipped as metadata, the columns
+    named 's', 'V', 'um'); now the header stays and the force in V is refused naming its unit."""
+    t, f, y = channels
+    path = tmp_path / "volts.csv"
+    write(path, "time,force,displacement\ns,V,um\n", [t, f, y * 1e6], ["%.6f", "%.17g", "%.17g"])
+    with pytest.raises(ValueError, match=r"the force channel 'force \[V\]' has unit 'V'; amb_fast needs one of N"):
+        af.load_recording(path)
+    assert af.io.sniff(path).names == ["time [s]", "force [V]", "displacement [um]"]

@@ -266,9 +266,14 @@ def cmd_identify(args: argparse.Namespace) -> None:
                      args.overwrite)  # fmt: skip
     _needs("matplotlib", "plot", "identify (it draws the figure)")
     rec = _read_recording(args)
-    estimate = identify(rec.force, rec.displacement, fs=rec.fs, f0=args.f0, mass=mass, f_max=args.f_max,
-                        lines=args.lines, settle_periods=args.settle_periods, median_window=args.median_window,
-                        clearance=args.clearance)  # fmt: skip
+    try:
+        estimate = identify(rec.force, rec.displacement, fs=rec.fs, f0=args.f0, mass=mass, f_max=args.f_max,
+                            lines=args.lines, settle_periods=args.settle_periods, median_window=args.median_window,
+                            clearance=args.clearance)  # fmt: skip
+    except ValueError as error:  # a refused fs says where it came from (the file's clock, or --fs)
+        if "fs" in str(error):
+            error.args = (f"{error}; {rec.fs_note()}",)
+        raise
     if args.at is None:
         args.at = default_at(estimate.freq)
     else:

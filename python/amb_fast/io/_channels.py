@@ -20,7 +20,8 @@ UNITS = {
     "n": ("force", 1.0), "kn": ("force", 1e3), "mn": ("force", 1e-3),
     "m": ("length", 1.0), "mm": ("length", 1e-3), "um": ("length", 1e-6), "µm": ("length", 1e-6),
     "μm": ("length", 1e-6), "micron": ("length", 1e-6), "nm": ("length", 1e-9),
-    "s": ("time", 1.0), "ms": ("time", 1e-3), "us": ("time", 1e-6),
+    "s": ("time", 1.0), "ms": ("time", 1e-3), "us": ("time", 1e-6), "µs": ("time", 1e-6), "μs": ("time", 1e-6),
+    "sec": ("time", 1.0), "msec": ("time", 1e-3), "usec": ("time", 1e-6),
 }  # fmt: skip
 _UNIT_IN_NAME = re.compile(r"^(?P<name>.*?)\s*(?:\[(?P<b>[^\]]*)\]|\((?P<p>[^)]*)\))\s*$")
 _UNIT_SUFFIX = re.compile(r"^(?P<name>.+?)_(?P<u>kN|mN|N|mm|um|µm|μm|nm|m|ms|us|s)$")
@@ -49,6 +50,15 @@ def _scale(name: str, quantity: str, path: Path) -> float:
         raise ValueError(f"{path.name}: the {quantity} channel {name!r} has unit {unit!r}; amb_fast needs "
                          f"one of {units} (scaled to SI), or rescale the column")  # fmt: skip
     return factor
+
+
+def scaled(name: str, quantity: str) -> str:
+    """A channel's name for ``Recording.source``, with the scaling its unit implied: ``"'x [um]' (um -> m)"``."""
+    unit = split_unit(name)[1]
+    si = {"force": "N", "displacement": "m", "time": "s"}[quantity]
+    if not unit or unit == si or UNITS.get(unit.lower(), ("", 1.0))[1] == 1.0:
+        return repr(name)
+    return f"{name!r} ({unit} -> {si})"
 
 
 def _index(names: list[str], key: str | int, role: str, path: Path) -> int:
@@ -87,8 +97,7 @@ def _find(names: list[str], key: str, role: str, path: Path) -> int:
                              f"{[f'{i}: {names[i]}' for i in hits]} match; choose one by index")  # fmt: skip
         if hits:
             return hits[0]
-    listed = ", ".join(f"{i}: {n!r}" for i, n in enumerate(names))
-    raise ValueError(f"{path.name} has no channel {key!r} for the {role}; its columns are {listed} "
+    raise ValueError(f"{path.name} has no channel {key!r} for the {role}; its columns are {_listed(names)} "
                      "(choose one by name or 0-based index)")  # fmt: skip
 
 
@@ -105,27 +114,53 @@ def _time_index(names: list[str], time: str | int | None, path: Path) -> int | N
         if str(time) != "time":
             raise
     hits = [i for i, n in enumerate(names) if split_unit(n)[0].strip().casefold() in TIME_NAMES]
-    return hits[0] if len(hits) == 1 else None
+    if len(hits) > 1:  # two columns that could be the clock: guessing one could give a wrong fs
+        raise ValueError(f"{path.name}: columns {[f'{i}: {names[i]}' for i in hits]} could each be the time "
+                         "column: choose one with time=NAME or its 0-based index, or ignore both with time=None "
+                         "and pass fs= (Hz; on the command line --fs)")  # fmt: skip
+    return hits[0] if hits else None
 
 
-def _agree(given: float | None, found: float | None, path: Path, where: str = "time column") -> float:
+def _listed(names: list[str]) -> str:
+    return ", ".join(f"{i}: {n!r}" for i, n in enumerate(names))
+
+
+def _agree(
+    given: float | None, found: float | None, path: Path, where: str = "time column", names: list[str] | None = None
+) -> float:
     if given is None and found is None:
-        raise ValueError(f"{path.name} has neither 'fs' nor a time column: pass fs= (Hz; on the command line --fs)")
+        columns = f" (its columns are {_listed(names)})" if names else ""
+        raise ValueError(f"{path.name} has neither 'fs' nor a time column{columns}: pass fs= (Hz; on the command "
+                         "line --fs), or name the time column with time=NAME or its 0-based index")  # fmt: skip
     if given is not None and found is not None and abs(given - found) > 1e-3 * found:
         raise ValueError(f"fs must agree with {path.name}'s {where} ({found:.10g} Hz) within 0.1 %, got {given:g}")
     return float(given if given is not None else found)  # type: ignore[arg-type]
+
+
+def fs_origin(found: float | None, where: str, path: Path, recording: str = "") -> str:
+    """Where a recording's fs came from, for messages: ``"the time column 'Time [s]' of rig.csv"``, ``"fs="``."""
+    if found is None:
+        return "fs= (given)"
+    return f"the {where} of {path.name}" + (f" recording {recording!r}" if recording else "")
 
 
 BLOCK = 1 << 13  # samples per block of the time column's checks: their temporaries stay small
 
 
 def _quantum(t: np.ndarray) -> float:
-    """The resolution the times were written with (``%.4f``: 1e-4), 0 if they look unrounded."""
+    """The resolution the times were written with (``%.4f``: 1e-4), 0 if they look unrounded.
+
+    Judged on the times from the first one, with the float spacing of the largest time allowed for (absolute
+    clocks such as Unix timestamps carry it: 2.4e-7 s at 1.7e9 s)."""
+    t0, spacing = float(t[0]), float(np.spacing(max(abs(float(t[0])), abs(float(t[-1])))))
     for digits in range(0, 10):
         ok = True
+        tolerance = 1e-6 + 4.0 * spacing * 10.0**digits
+        if tolerance > 1e-2:  # digits finer than the floats resolve
+            return 0.0
         for a in range(0, t.size, BLOCK):
-            x = t[a : a + BLOCK] * 10.0**digits
-            if float(np.max(np.abs(x))) >= 1e15 or float(np.max(np.abs(x - np.rint(x)))) >= 1e-6:
+            x = (t[a : a + BLOCK] - t0) * 10.0**digits
+            if float(np.max(np.abs(x))) >= 1e15 or float(np.max(np.abs(x - np.rint(x)))) >= tolerance:
                 ok = False
                 break
         if ok:
@@ -146,13 +181,15 @@ def fs_from_time(t: np.ndarray, path: Path, name: str, scale: float) -> float:
     n = t.size
     require(n >= 2 and bool(np.all(np.isfinite(t))), "time", f"column {name!r} of {path.name}",
             "at least two finite times to give fs")  # fmt: skip
-    middle, mean = (n - 1) / 2.0, float(t.mean())
+    middle, t0 = (n - 1) / 2.0, float(t[0])
+    mean = t0 + sum(float(np.sum(t[a : a + BLOCK] - t0)) for a in range(0, n, BLOCK)) / n
 
     def k(a: int) -> np.ndarray:
         return np.arange(a, min(a + BLOCK, n)) - middle
 
-    # Least squares over k = 0..n-1 centred: step = sum k t / sum k^2 (sum k = 0).
-    step = sum(float(k(a) @ t[a : a + BLOCK]) for a in range(0, n, BLOCK)) / (n * (n * n - 1.0) / 12.0)
+    # Least squares over k = 0..n-1 centred: step = sum k t / sum k^2 (sum k = 0), on t - t[0]: an absolute
+    # clock's offset (Unix time, 1.7e9 s) would otherwise swamp the sum (fs 3999.998 Hz for 4000).
+    step = sum(float(k(a) @ (t[a : a + BLOCK] - t0)) for a in range(0, n, BLOCK)) / (n * (n * n - 1.0) / 12.0)
     require(step > 0, "time", f"column {name!r} of {path.name}", "increasing to give fs")
     quantum = _quantum(t)
     row = -1
@@ -170,11 +207,12 @@ def fs_from_time(t: np.ndarray, path: Path, name: str, scale: float) -> float:
     if row > 0:
         raise ValueError(f"{path.name}: the time column {name!r} is not a uniform clock: at data row {row} "
                          f"(t = {t[row]:.10g}) the step is {t[row] - t[row - 1]:.6g} against {step:.6g} fitted over "
-                         f"all {n} rows (a gap, a repeat or a restart); pass fs= (Hz; on the command line --fs), "
-                         "or time=None to ignore the column")  # fmt: skip
+                         f"all {n} rows (a gap, a repeat or a restart); cut the record before that row, or ignore "
+                         "the column with time=None and pass fs= (Hz; on the command line --fs)")  # fmt: skip
     fs = 1.0 / (step * scale)
     # The fit's uncertainty with the times rounded to `quantum` (uniform errors): about q / n^1.5 in the step.
-    spread = 3.0 * max(quantum, 1e-15 * max(abs(float(t[0])), abs(float(t[-1])))) / n**1.5 / step * fs
+    spacing = float(np.spacing(max(abs(float(t[0])), abs(float(t[-1])))))
+    spread = 3.0 * max(quantum, 4.0 * spacing) / n**1.5 / step * fs
     for decimals in range(-int(np.floor(np.log10(fs))), 12):
         candidate = round(fs, decimals)
         if abs(candidate - fs) <= spread:
@@ -186,7 +224,8 @@ def _file_fs(channels: dict[str, np.ndarray], time: str | int | None, path: Path
     """fs (Hz) from a file's ``fs`` variable or its time column, and where it came from."""
     names = list(channels)
     if "fs" in channels:
-        return float(np.ravel(channels["fs"])[0]), "'fs' variable"
+        where = "channels' wf_increment" if path.suffix.lower() == ".tdms" else "'fs' variable"  # TDMS: the waveform's
+        return float(np.ravel(channels["fs"])[0]), where
     index = _time_index(names, time, path)
     if index is None:
         return None, ""

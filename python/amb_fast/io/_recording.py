@@ -17,12 +17,12 @@ from numpy.typing import ArrayLike
 from .._equality import ArrayRecord
 from .._validate import real, require, series
 from ._atomic import atomic_write
-from ._channels import _agree, _channel, _choose_recording, _file_fs, _scale
+from ._channels import _agree, _channel, _choose_recording, _file_fs, _scale, fs_origin, scaled
 from ._mat import _read_mat
 from ._tdms import _read_tdms
 from ._text import _load_text
 
-SUFFIXES = (".csv", ".tsv", ".txt", ".mat", ".tdms")
+SUFFIXES = (".csv", ".tsv", ".txt", ".mat", ".tdms", ".lvm", ".dat")  # .lvm: LabVIEW, .dat: DAQs' text exports
 CHUNK_LINES = 1 << 16  # rows per chunk when writing
 
 
@@ -37,13 +37,22 @@ class Recording(ArrayRecord):
     fs : float
         Sampling frequency, Hz.
     source : str
-        Where they came from: file, recording and channel names with the units they were scaled from.
+        Where they came from: file, recording and channel names with the units they were scaled from
+        (``'Displacement [um]' (um -> m)``) and where fs came from.
+    fs_from : str
+        Where ``fs`` came from, for messages: ``"the time column 'Time [s]' of rig.csv"``, ``"the 'fs'
+        variable of rig.mat"`` or ``"fs= (given)"``. See :meth:`fs_note`.
     """
 
     force: np.ndarray
     displacement: np.ndarray
     fs: float
     source: str = ""
+    fs_from: str = ""
+
+    def fs_note(self) -> str:
+        """``"fs 4000.1 Hz (from the time column 'Time [s]' of rig.csv)"``: to add to an error about fs or f0."""
+        return f"fs {self.fs:.10g} Hz" + (f" (from {self.fs_from})" if self.fs_from else "")
 
 
 def save_recording(
@@ -95,8 +104,10 @@ def load_recording(
 ) -> Recording:
     """Read force and displacement channels from a rig's file.
 
-    Formats: CSV/TSV/``.txt`` (``,``, ``;``, tab or blank separated; quoted headers; an optional units
-    row; decimal commas; ``#`` comment lines), MATLAB ``.mat`` v4-v7 (scipy) and v7.3 (HDF5, needs h5py)
+    Formats: CSV/TSV/``.txt``/``.dat`` and LabVIEW's ``.lvm`` (``,``, ``;``, tab or blank separated;
+    quoted headers; an optional units row; decimal commas; ``#`` comment lines; metadata lines before
+    the header, such as LabVIEW's ``***End_of_Header***`` blocks, skipped; no header: columns by index),
+    MATLAB ``.mat`` v4-v7 (scipy) and v7.3 (HDF5, needs h5py)
     with top-level variables or dSPACE ControlDesk/TRACE exports (a struct with ``X.Data`` for time
     and ``Y(k).Name`` / ``Y(k).Data`` per channel), and NI ``.tdms`` (needs ``amb_fast[tdms]``; each
     group is a recording). Text files are read in chunks, keeping only the chosen columns.
@@ -112,7 +123,24 @@ def load_recording(
         Which recording of a file that holds several (dSPACE exports, TDMS groups). Required then:
         channels of different recordings are never mixed.
     time : str or int or None
-        The time column (s, or ``ms``/``us`` by its unit), used for fs and checked to be uniform.
+        The time column, by name or 0-based index. The default ``"time"`` also finds the usual names of a
+        time column (``Time [s]``, ``TIME``, ``t [ms]``, ``Zeit``, ``timestamp``, LabVIEW's ``X_Value``);
+        two such columns are an error naming both. Its unit (s, ms, us) scales it. fs is the clock fitted
+        by least squares over the whole column: a clock rounded to its printed digits is uniform (``%.4f``
+        at 4 kHz gives 4000 Hz), a gap, repeat or restart is refused naming the row. ``None`` ignores any
+        time column (then ``fs`` is needed). On the command line: ``--time``.
+
+    Returns
+    -------
+    Recording
+        The channels in N and m, fs, and where they came from (``source``, ``fs_from``).
+
+    Raises
+    ------
+    ValueError
+        A channel or time column not found (the message lists the file's columns with their indices),
+        ambiguous, in a unit that is not a force/length/time, a non-uniform clock, ``fs`` disagreeing with
+        the file's, or neither ``fs`` nor a time column.
     """
     path = Path(path)
     require(path.is_file(), "path", str(path), "an existing file")
@@ -129,11 +157,16 @@ def load_recording(
     name, channels = _choose_recording(groups, path, recording, (force, displacement))
     f_name, f_values = _channel(channels, force, "force", path)
     y_name, y_values = _channel(channels, displacement, "displacement", path)
+    sizes = (np.size(f_values), np.size(y_values))
+    if sizes[0] != sizes[1] or sizes[0] < 2:  # a scalar (such as 'fs') chosen by index, or two recordings' channels
+        raise ValueError(f"{path.name}: the force {f_name!r} has {sizes[0]} samples and the displacement {y_name!r} "
+                         f"{sizes[1]}: choose two channels of the same recording, of at least 2 samples")  # fmt: skip
     f_values = f_values * _scale(f_name, "force", path)
     y_values = y_values * _scale(y_name, "displacement", path)
     found, origin = _file_fs(channels, time, path)
-    fs = _agree(fs, found, path, origin)
+    fs = _agree(fs, found, path, origin, list(channels))
     where = f"{path.name}" + (f" recording {name!r}" if name else "")
     clock = f"; fs {fs:.10g} Hz from its {origin}" if found is not None else f"; fs {fs:.10g} Hz given"
     return Recording(series("force", f_values), series("displacement", y_values), fs,
-                     f"{where}: force {f_name!r}, displacement {y_name!r}{clock}")  # fmt: skip
+                     f"{where}: force {scaled(f_name, 'force')}, displacement {scaled(y_name, 'displacement')}{clock}",
+                     fs_origin(found, origin, path, name))  # fmt: skip

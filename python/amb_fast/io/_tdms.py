@@ -19,12 +19,15 @@ def _read_tdms(path: Path) -> dict[str, dict[str, np.ndarray]]:
     with TdmsFile.open(path) as tdms:
         for group in tdms.groups():
             channels: dict[str, np.ndarray] = {}
+            fs = None
             for channel in group.channels():
                 unit = channel.properties.get("unit_string")
                 name = channel.name if not unit or split_unit(channel.name)[1] else f"{channel.name} [{unit}]"
                 channels[name] = np.asarray(channel[:], dtype=float)
                 increment = channel.properties.get("wf_increment")
-                if increment and "fs" not in channels:
-                    channels["fs"] = np.asarray(1.0 / float(increment))
+                if increment and fs is None:
+                    fs = np.asarray(1.0 / float(increment))
+            if fs is not None and "fs" not in channels:  # after the channels: their 0-based indices stay the file's
+                channels["fs"] = fs
             groups[group.name] = channels
     return groups

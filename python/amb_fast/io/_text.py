@@ -14,9 +14,13 @@ from pathlib import Path
 import numpy as np
 
 from .._validate import require
-from ._channels import UNITS, _agree, _index, _scale, _time_index, fs_from_time, split_unit
+from ._channels import UNITS, _agree, _index, _scale, _time_index, fs_from_time, fs_origin, scaled, split_unit
 
 CHUNK_BYTES = 1 << 16  # text per chunk when reading: bounds the memory beyond the two channels
+# Units a DAQ writes in a units row that amb_fast does not scale: recognised so the row is not taken for the
+# header (the header row above it would be lost), and a channel in one of them is refused naming its unit.
+OTHER_UNITS = frozenset({"v", "mv", "a", "ma", "g", "lbf", "in", "mil", "mils", "hz", "rpm", "pa", "bar", "%", "-",
+                         "°c", "degc", "k", "w", "rad", "deg", "m/s", "m/s^2", "m/s2"})  # fmt: skip
 WIDE = 16  # columns beyond which text is parsed by numpy (smaller buffers) even with pandas installed
 
 
@@ -101,7 +105,9 @@ def sniff(path: Path) -> _Dialect:
             # The header has the data's fields, or one more whose column is empty (LabVIEW's "Comment").
             before = [r[:width] for r in rows[max(0, start - 2) : start] if len(r) in (width, width + 1)]
             units_row = len(before) == 2 and all(
-                u.strip().strip("[]()").lower() in UNITS for u in before[1] if u.strip()
+                u.strip().strip("[]()").lower() in UNITS or u.strip().strip("[]()").lower() in OTHER_UNITS
+                for u in before[1]
+                if u.strip()
             )
             if units_row:  # a header, then a units row
                 names = [n.strip() for n in before[0]]
@@ -122,8 +128,8 @@ def sniff(path: Path) -> _Dialect:
 
 def _load_text(
     path: Path, force: str | int, displacement: str | int, fs: float | None, time: str | int | None
-) -> tuple[np.ndarray, np.ndarray, float, str]:
-    """Force (N), displacement (m), fs (Hz) and the source of a text recording: the fields of its Recording."""
+) -> tuple[np.ndarray, np.ndarray, float, str, str]:
+    """Force (N), displacement (m), fs (Hz), the source and fs's origin of a text recording: its Recording's fields."""
     dialect = sniff(path)
     names = dialect.names
     headerless = names[0] == "column 0"
@@ -132,8 +138,9 @@ def _load_text(
     except ValueError as error:
         if headerless:
             raise ValueError(f"{path.name} has no header row naming its {len(names)} columns: choose the force and "
-                             "the displacement by 0-based index (force=1, displacement=2; on the command line "
-                             "--force 1 --displacement 2)") from error  # fmt: skip
+                             "the displacement by 0-based index (force=1, displacement=2, and the time column, "
+                             "if any, time=0; on the command line --force 1 --displacement 2 --time 0)") \
+                from error  # fmt: skip
         raise
     f_name, y_name = names[columns[0]], names[columns[1]]
     t_index = None if headerless and not isinstance(time, int) else _time_index(names, time, path)
@@ -151,7 +158,7 @@ def _load_text(
     if t_index is not None and row >= 2:
         found = fs_from_time(out[2], path, names[t_index], _scale(names[t_index], "time", path))
         origin = f"time column {names[t_index]!r}"
-    fs = _agree(fs, found, path, origin)
+    fs = _agree(fs, found, path, origin, names)
     force_values = out[0]
     displacement_values = out[1]
     scale_f, scale_y = _scale(f_name, "force", path), _scale(y_name, "displacement", path)
@@ -161,7 +168,8 @@ def _load_text(
         displacement_values *= scale_y
     clock = f"; fs {fs:.10g} Hz from its {origin}" if found is not None else f"; fs {fs:.10g} Hz given"
     return (np.ascontiguousarray(force_values), np.ascontiguousarray(displacement_values), fs,
-            f"{path.name}: force {f_name!r}, displacement {y_name!r}{clock}")  # fmt: skip
+            f"{path.name}: force {scaled(f_name, 'force')}, displacement {scaled(y_name, 'displacement')}{clock}",
+            fs_origin(found, origin, path))  # fmt: skip
 
 
 def _chunks(path: Path, dialect: _Dialect, use: list[int]) -> Iterator[np.ndarray]:
