@@ -80,8 +80,8 @@ def test_a_refused_fs_says_it_came_from_the_time_column(tmp_path, capsys) -> Non
     assert abs(rec.fs - 4000.1) < 1e-3
     status = cli.main(["identify", str(path), "--f0", "1", "--mass", "0.92", "--out", str(tmp_path / "out")])
     err = capsys.readouterr().err
-    assert status != 0  # 1 today; exit 2 for an input file's mistake is case 9 (another branch)
-    assert "fs/f0 must be a whole number of samples per period" in err
+    assert status == 2  # a mistake in the input file (case 9)
+    assert "--fs/--f0 must be a whole number of samples per period" in err  # the command's words (case 7)
     assert "(from the time column 'Time [s]' of drift.csv)" in err
 
 
