@@ -147,7 +147,7 @@ def test_steady_line_spectra_have_the_statistics_of_the_time_domain_loop(coupled
 @pytest.mark.parametrize("window", [1, 3, 5, 7])
 def test_median_across_lines_equals_numpy(rng, window: int) -> None:
     """The two-axis estimate's running median (the core's, per entry) against numpy's sliding window."""
-    from amb_fast.two_axis._experiment import _median
+    from amb_fast.system._experiment import median_lines as _median
 
     x = np.round(rng.normal(size=(23, 2, 2)), 1)  # rounded: ties
     half = window // 2

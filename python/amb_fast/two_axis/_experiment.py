@@ -13,9 +13,9 @@ from numpy.typing import ArrayLike
 from .. import _core
 from .._equality import ArrayRecord
 from .._excitation import Multisine, period_samples
-from .._experiment import MAX_AUTOMATIC_SETTLE, _lines
-from .._linear import settle_periods_for
+from .._experiment import _lines
 from .._validate import integer, real, require, seed_value
+from ..system._experiment import median_lines, settle_for
 from ._model import ControllerSpec, LoopModel, controller_matrix, loop_model, require_stable
 from ._rig import TwoAxisRig
 
@@ -158,8 +158,8 @@ def estimate2(
         receptance=receptance,
         k=k,
         c=c,
-        k_smooth=_median(k, median_window),
-        c_smooth=_median(c, median_window),
+        k_smooth=median_lines(k, median_window),
+        c_smooth=median_lines(c, median_window),
         k_std=k_std,
         c_std=c_std,
         force=scale * F,
@@ -176,11 +176,6 @@ def coefficients2(
     line (freq, Hz, along the third axis from the end: (..., lines, 2, 2))."""
     w = (2 * np.pi * freq)[:, None, None]
     return mass * w**2 * np.eye(2) + H.real, H.imag / w, np.sqrt(var_re), np.sqrt(var_im) / w
-
-
-def _median(x: np.ndarray, window: int) -> np.ndarray:
-    """Running median across the lines (axis 0) per entry; the ends repeat the edge value."""
-    return _core.median_filter(x.reshape(x.shape[0], -1), window).reshape(x.shape)
 
 
 _last_pair: tuple[np.ndarray, np.ndarray] | None = None
@@ -266,22 +261,10 @@ def _point_args(
     require(excitation.fs == spec.fs, "excitation.fs", excitation.fs, f"equal to the controller's fs ({spec.fs} Hz)")
     loop, poles = checked if checked is not None else (loop_model(rig, spec), require_stable(rig, spec))
     if settle_periods is None:
-        settle_periods = 0 if start == "steady" else _settle(rig, spec.fs, poles, excitation.period_samples)
+        settle_periods = 0 if start == "steady" else settle_for(rig, spec.fs, poles, excitation.period_samples)
     settle = integer("settle_periods", settle_periods, 0)
     s = seed_value(seed)
     return _core_args(loop, rig, outputs=2), settle, [s, (s ^ 0xA5A5A5A5DEADBEEF) % 2**64]
-
-
-def _settle(rig: TwoAxisRig, fs: float, poles: np.ndarray, period: int) -> int:
-    slowest = float(np.max(np.abs(poles), initial=0.0))
-    for axis in rig.axes:
-        if axis.force_coupling_tau is not None:
-            slowest = max(slowest, float(np.exp(-1.0 / (fs * axis.force_coupling_tau))))
-    periods = int(settle_periods_for(np.array(slowest), period))
-    if periods > MAX_AUTOMATIC_SETTLE:
-        raise ValueError(f"settling from rest would take {periods} periods (> {MAX_AUTOMATIC_SETTLE}): slowest pole "
-                         f"|z| = {slowest:.12g}; use start='steady' or give settle_periods")  # fmt: skip
-    return periods
 
 
 def identify(
