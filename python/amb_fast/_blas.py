@@ -23,6 +23,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import functools
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from typing import Any, TypeVar
@@ -33,15 +34,18 @@ _controller: Any = None
 _lock = threading.Lock()  # guards _depth and _limiter: the guard is process-wide, as BLAS settings are
 _depth = 0  # guards entered and not yet left, on any thread
 _limiter: Any = None  # the outermost guard's threadpoolctl limiter (what restores the user's settings)
-_stoppers: list[Callable[[], int]] | None = None  # blas_thread_shutdown_ of each OpenBLAS pthreads pool
+_stoppers: list[Any] | None = None  # blas_thread_shutdown_ of each OpenBLAS pthreads pool
+_scanned_at = -1  # len(sys.modules) when the libraries were scanned
 
 
 def _blas_controller() -> Any:
-    global _controller
-    if _controller is None:  # scanning the loaded libraries costs a few ms: once per process
+    """threadpoolctl's view of the BLAS libraries loaded; scanned again (a few ms) after modules were
+    imported (scipy's own OpenBLAS arrives with scipy.linalg)."""
+    global _controller, _stoppers, _scanned_at
+    if _controller is None or _scanned_at != len(sys.modules):
         from threadpoolctl import ThreadpoolController
 
-        _controller = ThreadpoolController()
+        _controller, _stoppers, _scanned_at = ThreadpoolController(), None, len(sys.modules)
     return _controller
 
 
@@ -89,13 +93,14 @@ def blas_threads_limited() -> bool:
     return _depth > 0
 
 
-def _pool_stoppers() -> list[Callable[[], int]]:
+def _pool_stoppers() -> list[Any]:
     """OpenBLAS's shutdown of its thread pool, for each loaded OpenBLAS built on pthreads (the ones
     whose idle workers spin); none for MKL, BLIS or OpenBLAS on OpenMP."""
     global _stoppers
+    controller = _blas_controller()
     if _stoppers is None:
         stoppers = []
-        for library in _blas_controller().info():
+        for library in controller.info():
             if library.get("internal_api") != "openblas" or library.get("threading_layer") != "pthreads":
                 continue
             with contextlib.suppress(OSError, AttributeError):
