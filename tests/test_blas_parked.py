@@ -150,3 +150,46 @@ def test_guards_overlapping_on_two_threads_restore_the_users_setting() -> None:
             t.join()
         assert inside == {"a": [1] * len(user), "b": [1] * len(user)}
         assert blas_threads() == user
+
+
+def test_two_axis_and_rotor_sweeps_park_the_pools_too(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Siblings: the two-axis sweep's core call and the rotor sweep's points (on threads) run with BLAS
+    on one thread and no OpenBLAS worker thread."""
+    if not openblas_pools():
+        pytest.skip("no OpenBLAS built on pthreads in this process")
+    from amb_fast.system import _sweep as rotor_sweep
+    from amb_fast.two_axis import _sweep as two_axis_sweep
+
+    seen: list[tuple[set[int], list[int]]] = []
+    core = two_axis_sweep._core
+
+    class Recording:
+        def __getattr__(self, name: str):  # noqa: ANN204
+            return getattr(core, name)
+
+        def mimo_line_sweep(self, *args, **kwargs):  # noqa: ANN202
+            seen.append((native_threads(), blas_threads()))
+            return core.mimo_line_sweep(*args, **kwargs)
+
+    monkeypatch.setattr(two_axis_sweep, "_core", Recording())
+    run = rotor_sweep.run_experiment
+
+    def recorded(*args, **kwargs):  # noqa: ANN202
+        seen.append((native_threads(), blas_threads()))
+        return run(*args, **kwargs)
+
+    monkeypatch.setattr(rotor_sweep, "run_experiment", recorded)
+    with threadpoolctl.threadpool_limits(2, user_api="blas"):
+        user = blas_threads()
+        user_matmul()
+        af.two_axis.sweep(af.TwoAxisRig.paper(), af.PID.paper(), af.schroeder_multisine(f0=0.25, f_max=50.0),
+                          kp=[2000.0, 2500.0], progress=False)  # fmt: skip
+        assert seen and blas_threads() == user
+        user_matmul()
+        rig = af.RotorRig.example()
+        sphs = af.schroeder_multisine(f0=20.0, f_max=400.0)  # 200-sample periods: quick
+        af.sweep(rig, af.RotorRig.example_controller(), sphs, speed=[0.0, 100.0], periods=3, progress=False)
+        assert len(seen) >= 3 and blas_threads() == user
+    for inside, counts in seen:
+        assert inside == set()
+        assert counts == [1] * len(user)

@@ -151,3 +151,15 @@ def one_blas_thread(function: F) -> F:
 
     wrapper.one_blas_thread = True  # type: ignore[attr-defined]
     return wrapper  # type: ignore[return-value]
+
+
+def parked_blas(function: F) -> F:
+    """Run ``function`` (a sweep on the core's threads) inside :func:`blas_parked`."""
+
+    @functools.wraps(function)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        with blas_parked():
+            return function(*args, **kwargs)
+
+    wrapper.one_blas_thread = True  # type: ignore[attr-defined]
+    return wrapper  # type: ignore[return-value]
