@@ -56,7 +56,32 @@ def seen_in_core(monkeypatch: pytest.MonkeyPatch) -> list[tuple[set[int], list[i
             return core.run_sweep(*args, **kwargs)
 
     monkeypatch.setattr(_sweep, "_core", Recording())
+    # The workers spin for ~0.1 s after a@a; on a loaded machine this test may reach the sweep later: the
+    # check of a running native thread is made true here (tested on its own below).
+    monkeypatch.setattr(_blas, "_native_thread_running", lambda: True)
     return seen
+
+
+def test_running_native_threads_are_seen() -> None:
+    """A native thread busy in C (here: the core's threads inside a long eigenvalue call started from a
+    Python thread) is seen as running; with none, nothing is."""
+    from amb_fast import _core
+
+    assert isinstance(_blas._native_thread_running(), bool)
+    stack = np.random.default_rng(0).random((40_000, 12, 12))
+    seen: list[bool] = []
+    done = threading.Event()
+
+    def busy() -> None:
+        _core.eigenvalues(stack, 2)
+        done.set()
+
+    worker = threading.Thread(target=busy)
+    worker.start()
+    while not done.is_set():
+        seen.append(_blas._native_thread_running())
+    worker.join()
+    assert any(seen)
 
 
 def user_matmul() -> np.ndarray:
@@ -158,6 +183,7 @@ def test_two_axis_and_rotor_sweeps_park_the_pools_too(monkeypatch: pytest.Monkey
     on one thread and no OpenBLAS worker thread."""
     if not openblas_pools():
         pytest.skip("no OpenBLAS built on pthreads in this process")
+    monkeypatch.setattr(_blas, "_native_thread_running", lambda: True)  # (as in seen_in_core)
     from amb_fast.system import _sweep as rotor_sweep
     from amb_fast.two_axis import _sweep as two_axis_sweep
 

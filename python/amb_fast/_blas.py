@@ -23,6 +23,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import functools
+import os
 import sys
 import threading
 from collections.abc import Callable, Iterator
@@ -118,12 +119,33 @@ def _alone_with_blas() -> bool:
     return all(t is me or t.daemon for t in threading.enumerate())
 
 
+def _native_thread_running() -> bool:
+    """Whether a thread Python did not start is running or runnable now (state R in /proc): OpenBLAS's
+    workers are while they spin, and sleep (S) once they stop. Where /proc is missing: assumed."""
+    try:
+        tids = os.listdir("/proc/self/task")
+    except OSError:
+        return True
+    python = {t.native_id for t in threading.enumerate()}
+    for tid in tids:
+        if int(tid) in python:
+            continue
+        try:
+            with open(f"/proc/self/task/{tid}/stat") as stat:
+                state = stat.read().rsplit(")", 1)[1].split()[0]
+        except (OSError, IndexError):
+            continue
+        if state == "R":
+            return True
+    return False
+
+
 def park_idle_blas_threads() -> bool:
     """Stop the idle (spinning) worker threads of OpenBLAS's pools, inside :func:`blas_on_one_thread` only
-    (no BLAS call can start on them there). Returns whether they were stopped: not where another Python
-    thread may be using BLAS, nor for libraries without such a pool."""
-    if not blas_threads_limited() or not _alone_with_blas():
-        return False
+    (no BLAS call can start on them there), when some native thread is running. Returns whether they were
+    stopped: not where another Python thread may be using BLAS, nor for libraries without such a pool."""
+    if not blas_threads_limited() or not _alone_with_blas() or not _native_thread_running():
+        return False  # (asleep: left alone, so nothing restarts them on leaving, and the next call is as fast)
     stoppers = _pool_stoppers()
     for stop in stoppers:
         stop()
