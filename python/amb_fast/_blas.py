@@ -156,11 +156,16 @@ def park_idle_blas_threads() -> bool:
 def blas_parked() -> Iterator[None]:
     """BLAS on one thread (:func:`blas_on_one_thread`) and OpenBLAS's idle workers stopped, for code whose
     own threads need every core (a sweep's core call): the user's numpy work just before leaves them
-    busy-waiting for about 0.1 s. On leaving, the user's thread counts come back (which starts the
-    pools again)."""
+    busy-waiting for about 0.1 s. On leaving, the user's thread counts come back; pools stopped here are
+    left stopped, and start again on the next multi-threaded call."""
     with blas_on_one_thread():
-        park_idle_blas_threads()
+        parked = park_idle_blas_threads()
         yield
+    if parked and not blas_threads_limited() and _alone_with_blas():
+        # Restoring the thread counts started the pools again, and new workers spin for ~0.1 s: stop them,
+        # so nothing spins after the sweep; the user's next multi-threaded call starts them (as after a fork).
+        for stop in _pool_stoppers():
+            stop()
 
 
 def one_blas_thread(function: F) -> F:
