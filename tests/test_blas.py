@@ -50,8 +50,8 @@ def test_the_calibration_entry_points_are_wrapped() -> None:
 
 def test_a_sweep_makes_its_points_with_blas_on_one_thread() -> None:
     """Where a sweep makes each point's rig and controller (a factory, a Controller's parameters, Rig
-    fields), on this thread or an executor's, BLAS runs on one thread; a sweep of PID gains here makes its
-    loops from cached matrices and enters no guard."""
+    fields), on this thread or an executor's, BLAS runs on one thread; every sweep here (PID gains too)
+    enters the guard that also stops OpenBLAS's idle workers (tests/test_blas_parked.py)."""
     import concurrent.futures
 
     from amb_fast import _sweep
@@ -74,20 +74,20 @@ def test_a_sweep_makes_its_points_with_blas_on_one_thread() -> None:
         assert blas_threads() == outside
 
     entered = []
-    original = _sweep.blas_on_one_thread
+    original = _sweep.blas_parked
 
     def counted():  # noqa: ANN202
         entered.append(1)
         return original()
 
-    _sweep.blas_on_one_thread = counted
+    _sweep.blas_parked = counted
     try:
         af.sweep(rig, pid, sphs, kp=[2000.0, 2500.0], ki=[0.0, 100.0], progress=False)
-        assert entered == []
-        af.sweep(rig, pid, sphs, amp_bandwidth=[900.0, 1100.0], progress=False)
         assert entered == [1]
+        af.sweep(rig, pid, sphs, amp_bandwidth=[900.0, 1100.0], progress=False)
+        assert entered == [1, 1]
     finally:
-        _sweep.blas_on_one_thread = original
+        _sweep.blas_parked = original
 
 
 def test_a_guard_inside_a_guard_does_nothing() -> None:

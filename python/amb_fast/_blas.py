@@ -1,4 +1,5 @@
-"""One BLAS thread inside the functions that make thousands of small matrix operations.
+"""One BLAS thread inside the functions that make thousands of small matrix operations, and no idle BLAS
+thread spinning on a core while a sweep's own threads run.
 
 Calibration, design and sweeps make thousands of matrix exponentials and solves of 5x5 to 30x30
 matrices. OpenBLAS splits even those across its threads, and their spin-waiting makes them many
@@ -7,12 +8,23 @@ times slower as soon as another process holds a core. Measured on the 2-core mac
 a 200-point sweep over ``amp_bandwidth`` on 2 threads takes 0.44 s alone and 1.2-1.4 s beside one busy
 process (0.27 s and 0.37-0.40 s). Inside the decorated functions BLAS runs on the calling thread; the
 process's own setting is restored on return.
+
+After every multi-threaded call (a user's ``a @ a`` of 300x300, an ``eigvals``), OpenBLAS's worker
+threads (its pthreads build, numpy's and scipy's wheels) busy-wait for 2**28 clock ticks (about 0.1 s)
+before they sleep, and limiting OpenBLAS to one thread does not stop them: a sweep started in that
+window shares its cores with them (40 points: 1.2x from one to two threads instead of 1.75x).
+:func:`blas_parked` stops those idle threads for a sweep (OpenBLAS's own shutdown, the one it runs
+before every ``fork``); setting the thread count back at the end starts them again, as OpenBLAS does
+after a fork.
 """
 
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import functools
+import os
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from typing import Any, TypeVar
@@ -20,27 +32,140 @@ from typing import Any, TypeVar
 F = TypeVar("F", bound=Callable[..., Any])
 
 _controller: Any = None
-_inside = threading.local()  # .guard: this thread is inside blas_on_one_thread
+_lock = threading.Lock()  # guards _depth and _limiter: the guard is process-wide, as BLAS settings are
+_depth = 0  # guards entered and not yet left, on any thread
+_limiter: Any = None  # the outermost guard's threadpoolctl limiter (what restores the user's settings)
+_stoppers: list[Any] | None = None  # blas_thread_shutdown_ of each OpenBLAS pthreads pool
+_scanned_at = -1  # len(sys.modules) when the libraries were scanned
+
+
+def _blas_controller() -> Any:
+    """threadpoolctl's view of the BLAS libraries loaded; scanned again (a few ms) after modules were
+    imported (scipy's own OpenBLAS arrives with scipy.linalg)."""
+    global _controller, _stoppers, _scanned_at
+    if _controller is None or _scanned_at != len(sys.modules):
+        from threadpoolctl import ThreadpoolController
+
+        _controller, _stoppers, _scanned_at = ThreadpoolController(), None, len(sys.modules)
+    return _controller
+
+
+def _take_blas_control() -> None:
+    """Let this thread set OpenBLAS's process-wide thread count: threadpoolctl (3.6 on) lets only the
+    first thread that set it do so until that is cleared, and ignores the others silently, so a guard
+    entered on one thread and left on another (or entered beside a user's ``threadpool_limits`` on
+    another thread) would limit or restore nothing."""
+    import threadpoolctl
+
+    clear = getattr(getattr(threadpoolctl, "OpenBLASController", None), "clear_controlling_thread", None)
+    if clear is not None:
+        clear(force=True)
 
 
 @contextlib.contextmanager
 def blas_on_one_thread() -> Iterator[None]:
-    """A context in which the BLAS libraries of the process (OpenBLAS, MKL, ...) run on one thread; inside
-    one already (nested, on this thread) it does nothing (a sweep's points each miss a cache that guards)."""
-    global _controller
-    if getattr(_inside, "guard", False):
-        yield
-        return
-    if _controller is None:  # scanning the loaded libraries costs a few ms: once per process
-        from threadpoolctl import ThreadpoolController
+    """A context in which the BLAS libraries of the process (OpenBLAS, MKL, ...) run on one thread.
 
-        _controller = ThreadpoolController()
-    _inside.guard = True
+    Process-wide, as the libraries' settings are: the first guard entered (on any thread) limits them,
+    the last one left restores what they were before it, so guards overlapping on several threads (a
+    sweep on an executor of threads) never leave the process on one thread. Inside one already it does
+    nothing more (a sweep's points each miss a cache that guards)."""
+    global _depth, _limiter
+    with _lock:
+        if _depth == 0:
+            controller = _blas_controller()
+            _take_blas_control()
+            _limiter = controller.limit(limits=1, user_api="blas")
+        _depth += 1
     try:
-        with _controller.limit(limits=1, user_api="blas"):
-            yield
+        yield
     finally:
-        _inside.guard = False
+        with _lock:
+            _depth -= 1
+            if _depth == 0:
+                limiter, _limiter = _limiter, None
+                _take_blas_control()
+                limiter.restore_original_limits()
+                _take_blas_control()  # and leave nobody in control, as threadpoolctl's own contexts do
+
+
+def blas_threads_limited() -> bool:
+    """Whether some thread of the process is inside :func:`blas_on_one_thread` now."""
+    return _depth > 0
+
+
+def _pool_stoppers() -> list[Any]:
+    """OpenBLAS's shutdown of its thread pool, for each loaded OpenBLAS built on pthreads (the ones
+    whose idle workers spin); none for MKL, BLIS or OpenBLAS on OpenMP."""
+    global _stoppers
+    controller = _blas_controller()
+    if _stoppers is None:
+        stoppers = []
+        for library in controller.info():
+            if library.get("internal_api") != "openblas" or library.get("threading_layer") != "pthreads":
+                continue
+            with contextlib.suppress(OSError, AttributeError):
+                function = ctypes.CDLL(library["filepath"]).blas_thread_shutdown_
+                function.restype, function.argtypes = ctypes.c_int, []
+                stoppers.append(function)
+        _stoppers = stoppers
+    return _stoppers
+
+
+def _alone_with_blas() -> bool:
+    """Whether no other Python thread could be inside a BLAS call: all others are daemons (Jupyter's,
+    tqdm's). Stopping a pool while another thread's call uses it could hang that call."""
+    me = threading.current_thread()
+    return all(t is me or t.daemon for t in threading.enumerate())
+
+
+def _native_thread_running() -> bool:
+    """Whether a thread Python did not start is running or runnable now (state R in /proc): OpenBLAS's
+    workers are while they spin, and sleep (S) once they stop. Where /proc is missing: assumed."""
+    try:
+        tids = os.listdir("/proc/self/task")
+    except OSError:
+        return True
+    python = {t.native_id for t in threading.enumerate()}
+    for tid in tids:
+        if int(tid) in python:
+            continue
+        try:
+            with open(f"/proc/self/task/{tid}/stat") as stat:
+                state = stat.read().rsplit(")", 1)[1].split()[0]
+        except (OSError, IndexError):
+            continue
+        if state == "R":
+            return True
+    return False
+
+
+def park_idle_blas_threads() -> bool:
+    """Stop the idle (spinning) worker threads of OpenBLAS's pools, inside :func:`blas_on_one_thread` only
+    (no BLAS call can start on them there), when some native thread is running. Returns whether they were
+    stopped: not where another Python thread may be using BLAS, nor for libraries without such a pool."""
+    if not blas_threads_limited() or not _alone_with_blas() or not _native_thread_running():
+        return False  # (asleep: left alone, so nothing restarts them on leaving, and the next call is as fast)
+    stoppers = _pool_stoppers()
+    for stop in stoppers:
+        stop()
+    return bool(stoppers)
+
+
+@contextlib.contextmanager
+def blas_parked() -> Iterator[None]:
+    """BLAS on one thread (:func:`blas_on_one_thread`) and OpenBLAS's idle workers stopped, for code whose
+    own threads need every core (a sweep's core call): the user's numpy work just before leaves them
+    busy-waiting for about 0.1 s. On leaving, the user's thread counts come back; pools stopped here are
+    left stopped, and start again on the next multi-threaded call."""
+    with blas_on_one_thread():
+        parked = park_idle_blas_threads()
+        yield
+    if parked and not blas_threads_limited() and _alone_with_blas():
+        # Restoring the thread counts started the pools again, and new workers spin for ~0.1 s: stop them,
+        # so nothing spins after the sweep; the user's next multi-threaded call starts them (as after a fork).
+        for stop in _pool_stoppers():
+            stop()
 
 
 def one_blas_thread(function: F) -> F:
@@ -49,6 +174,18 @@ def one_blas_thread(function: F) -> F:
     @functools.wraps(function)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         with blas_on_one_thread():
+            return function(*args, **kwargs)
+
+    wrapper.one_blas_thread = True  # type: ignore[attr-defined]
+    return wrapper  # type: ignore[return-value]
+
+
+def parked_blas(function: F) -> F:
+    """Run ``function`` (a sweep on the core's threads) inside :func:`blas_parked`."""
+
+    @functools.wraps(function)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        with blas_parked():
             return function(*args, **kwargs)
 
     wrapper.one_blas_thread = True  # type: ignore[attr-defined]

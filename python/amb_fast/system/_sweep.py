@@ -16,6 +16,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._blas import blas_parked
 from .._equality import ArrayRecord
 from .._errors import UnstableLoopError
 from .._excitation import Multisine
@@ -148,17 +149,18 @@ def sweep(
 
     bar = _progress_bar(progress, count)
     own = executor is None
-    pool = ThreadPoolExecutor(threads) if own else executor
-    try:
-        for i, est in enumerate(pool.map(point, range(count))):  # type: ignore[union-attr]
-            if est is not None:
-                stable[i] = True
-                k[i], c[i], k_std[i], c_std[i], receptance[i] = est.k, est.c, est.k_std, est.c_std, est.receptance
+    with blas_parked():  # points on threads: BLAS on one thread, no idle OpenBLAS worker spinning
+        pool = ThreadPoolExecutor(threads) if own else executor
+        try:
+            for i, est in enumerate(pool.map(point, range(count))):  # type: ignore[union-attr]
+                if est is not None:
+                    stable[i] = True
+                    k[i], c[i], k_std[i], c_std[i], receptance[i] = est.k, est.c, est.k_std, est.c_std, est.receptance
+                if bar is not None:
+                    bar.update(1)
+        finally:
+            if own:
+                pool.shutdown()  # type: ignore[union-attr]
             if bar is not None:
-                bar.update(1)
-    finally:
-        if own:
-            pool.shutdown()  # type: ignore[union-attr]
-        if bar is not None:
-            bar.close()
+                bar.close()
     return SweepResultN(points, excitation.freq, k, c, k_std, c_std, receptance, stable, seeds, rig.mechanics().names)

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _core
-from .._blas import one_blas_thread
+from .._blas import parked_blas
 from .._equality import ArrayRecord
 from .._errors import UnstableLoopError
 from .._excitation import Multisine, schroeder_multisine
@@ -116,7 +116,7 @@ def point_model2(rig: TwoAxisRig, controller: ControllerSpec, values: dict[str, 
     return replace(rig, x=x, y=y, **changes), ControllerMatrix((tuple(entries[0]), tuple(entries[1])), spec.fs)  # type: ignore[arg-type]
 
 
-@one_blas_thread
+@parked_blas  # BLAS on one thread, OpenBLAS's idle workers stopped (issue 25 case 11)
 def sweep(
     rig: TwoAxisRig,
     controller: ControllerSpec,
