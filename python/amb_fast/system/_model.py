@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import Any, Literal, Protocol
+from typing import Literal, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -385,10 +385,3 @@ def known_dynamics(mechanics: Mechanics, freq: np.ndarray) -> np.ndarray:
     w = (2 * np.pi * np.asarray(freq, dtype=float))[:, None, None]
     Mb, Gb = mechanics.at_bearings(mechanics.mass), mechanics.at_bearings(mechanics.gyroscopic)
     return (-(w**2) * Mb + 1j * w * mechanics.speed * Gb) @ np.linalg.inv(mechanics.frame)
-
-
-def as_system(value: Any) -> System:
-    """``value`` if it has a structure and per-axis chains (``mechanics()``, ``axes``), else a ValueError."""
-    ok = callable(getattr(value, "mechanics", None)) and isinstance(getattr(value, "axes", None), tuple)
-    require(ok, "rig", type(value).__name__, "a rig of N axes (TwoAxisRig, RotorRig)")
-    return value

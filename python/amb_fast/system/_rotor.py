@@ -11,7 +11,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, Union
+from typing import Any
 
 import numpy as np
 
@@ -102,9 +102,6 @@ def _rotor_mechanics(rotor: RigidRotor) -> Mechanics:
     for matrix in matrices:
         matrix.flags.writeable = False
     return Mechanics(*matrices, float(rotor.speed), AXES, ("x", "y", "tx", "ty"))
-
-
-AxesSpec = Union[Rig, Sequence[Rig]]
 
 
 @dataclass(frozen=True)
