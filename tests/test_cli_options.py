@@ -9,25 +9,8 @@ import numpy as np
 import pytest
 
 import amb_fast as af
-from amb_fast import cli
 from amb_fast.cli._options import IDENTIFY_OPTION_NAMES, MODEL_OPTION_NAMES, cli_text, default_f_max
-
-
-def run(capsys, *args: str) -> tuple[int, str, str]:
-    """The command in this process: (exit status, stdout, stderr)."""
-    try:
-        status = cli.main(list(args))
-    except SystemExit as done:  # argparse's own errors
-        status = int(done.code or 0)
-    out, err = capsys.readouterr()
-    return status, out, err
-
-
-def one_error_line(err: str) -> str:
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, lines
-    assert lines[0].startswith("amb-fast: error: ") and "Traceback" not in err
-    return lines[0]
+from cli_helpers import one_error_line, run
 
 
 def table_lines(out: str) -> list[float]:

@@ -7,13 +7,7 @@ import numpy as np
 import pytest
 
 import amb_fast as af
-from amb_fast.cli import main
-
-
-def run(capsys, *argv: str) -> tuple[int, str, str]:  # noqa: ANN001
-    status = main(list(argv))
-    out, err = capsys.readouterr()
-    return status, out, err
+from cli_helpers import run
 
 
 def test_campbell_sensitivity_and_unbalance_of_the_example(capsys, tmp_path) -> None:  # noqa: ANN001
