@@ -139,3 +139,55 @@ def test_a_units_row_with_a_unit_amb_fast_does_not_scale_keeps_the_header(tmp_pa
     with pytest.raises(ValueError, match=r"the force channel 'force \[V\]' has unit 'V'; amb_fast needs one of N"):
         af.load_recording(path)
     assert af.io.sniff(path).names == ["time [s]", "force [V]", "displacement [um]"]
+
+
+def test_a_rate_stated_in_the_metadata_gives_fs(tmp_path, channels) -> None:
+    """A DAQ's "Sample rate: 4000 Hz" above a header without a time column was ignored (fs= was asked for)."""
+    _, f, y = channels
+    for preamble, expected in [("Device: NI 9234\nSample rate: 4000 Hz\n", 4000.0),
+                               ("Sampling Frequency = 4 kHz\n", 4000.0),
+                               ('"Sample Rate (Hz)",2000\n', 2000.0),
+                               ("Delta_X\t0.000250\t0.000250\t\n", 4000.0),
+                               ("Sample interval: 0.5 ms\n", 2000.0)]:  # fmt: skip
+        path = tmp_path / "daq.csv"
+        write(path, preamble + "force,displacement\n", [f, y], ["%.17g", "%.17g"])
+        rec = af.load_recording(path)
+        assert rec.fs == expected, preamble
+        assert "from its metadata line" in rec.source
+        np.testing.assert_array_equal(rec.force, f)
+    with pytest.raises(ValueError, match=r"fs must agree with daq.csv's metadata line 'Sample interval: 0.5 ms'"):
+        af.load_recording(path, fs=4000.0)
+    # "fs: 16 bit" states no rate: still refused for want of fs
+    write(path, "fs: 16 bit\nforce,displacement\n", [f, y], ["%.17g", "%.17g"])
+    with pytest.raises(ValueError, match="has neither 'fs' nor a time column"):
+        af.load_recording(path)
+
+
+def test_a_stated_rate_that_contradicts_the_time_column_is_refused(tmp_path, channels) -> None:
+    t, f, y = channels
+    path = tmp_path / "daq.csv"
+    write(path, "Sample rate: 5000 Hz\ntime,force,displacement\n", [t, f, y], ["%.6f", "%.17g", "%.17g"])
+    with pytest.raises(ValueError, match=r"time column 'time' gives fs 4000 Hz but its metadata line "
+                                         r"'Sample rate: 5000 Hz' states 5000 Hz"):  # fmt: skip
+        af.load_recording(path)
+    write(path, "Sample rate: 4000 Hz\nSampling rate: 5000 Hz\nforce,displacement\n", [f, y], ["%.17g", "%.17g"])
+    with pytest.raises(ValueError, match=r"states two sampling rates: 'Sample rate: 4000 Hz' \(4000 Hz\) and"):
+        af.load_recording(path)
+
+
+def test_mega_is_not_milli(tmp_path, channels) -> None:
+    """Units were compared in lower case: 'Force [MN]' read as mN, 1e9 times too small."""
+    t, f, y = channels
+    path = tmp_path / "mega.csv"
+    write(path, "time,Force [MN],displacement\n", [t, f * 1e-6, y], ["%.6f", "%.17g", "%.17g"])
+    rec = af.load_recording(path)
+    np.testing.assert_allclose(rec.force, f, rtol=1e-12)
+    assert "(MN -> N)" in rec.source
+    write(path, "TIME,FORCE [MN],DISP [MM]\n", [t, f * 1e3, y * 1e3], ["%.6f", "%.17g", "%.17g"])
+    with pytest.raises(ValueError, match=r"the channel 'FORCE \[MN\]' has unit 'MN', written in capitals: meganewton "
+                                         "or millinewton"):  # fmt: skip
+        af.load_recording(path, force="force", displacement="disp")
+    path.write_text(path.read_text().replace("[MN]", "[KN]"))
+    rec = af.load_recording(path, force="force", displacement="disp")  # KN and MM: kN and mm, whatever the case
+    np.testing.assert_allclose(rec.force, f * 1e6, rtol=1e-12)
+    np.testing.assert_allclose(rec.displacement, y, rtol=1e-12)

@@ -39,14 +39,26 @@ def split_unit(name: str) -> tuple[str, str | None]:
     return name, None
 
 
+def unit_of(name: str, unit: str, path: Path) -> tuple[str | None, float]:
+    """(quantity, factor to SI) of a channel's unit, compared without case except for mega: ``MN`` is a
+    meganewton (1e6 N), not mN; in a name written all in capitals (``FORCE [MN]``) it could be either and is
+    refused."""
+    if unit == "MN":
+        if name.upper() == name:
+            raise ValueError(f"{path.name}: the channel {name!r} has unit 'MN', written in capitals: meganewton or "
+                             "millinewton? Write the unit as 'mN' or 'kN' (or rescale the column to N)")  # fmt: skip
+        return "force", 1e6
+    return UNITS.get(unit.lower(), (None, 1.0))
+
+
 def _scale(name: str, quantity: str, path: Path) -> float:
     unit = split_unit(name)[1]
     if unit is None or unit == "":
         return 1.0
     want = {"force": "force", "displacement": "length", "time": "time"}[quantity]
-    kind, factor = UNITS.get(unit.lower(), (None, 1.0))
+    kind, factor = unit_of(name, unit, path)
     if kind != want:
-        units = {"force": "N, kN, mN", "length": "m, mm, um, nm", "time": "s, ms, us"}[want]
+        units = {"force": "N, kN, mN, MN", "length": "m, mm, um, nm", "time": "s, ms, us"}[want]
         raise ValueError(f"{path.name}: the {quantity} channel {name!r} has unit {unit!r}; amb_fast needs "
                          f"one of {units} (scaled to SI), or rescale the column")  # fmt: skip
     return factor
@@ -56,7 +68,7 @@ def scaled(name: str, quantity: str) -> str:
     """A channel's name for ``Recording.source``, with the scaling its unit implied: ``"'x [um]' (um -> m)"``."""
     unit = split_unit(name)[1]
     si = {"force": "N", "displacement": "m", "time": "s"}[quantity]
-    if not unit or unit == si or UNITS.get(unit.lower(), ("", 1.0))[1] == 1.0:
+    if not unit or unit == si or (1e6 if unit == "MN" else UNITS.get(unit.lower(), ("", 1.0))[1]) == 1.0:
         return repr(name)
     return f"{name!r} ({unit} -> {si})"
 

@@ -7,6 +7,7 @@ chosen columns (pandas' C parser when installed, numpy's ``loadtxt`` otherwise).
 from __future__ import annotations
 
 import csv
+import re
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,6 +33,42 @@ class _Dialect:
     skip: int  # lines before the first data line (comments, header, units row)
     comment_percent: bool = False  # '%' comment lines among the data
     line_bytes: int = 64  # typical length of a data line
+    rate: tuple[float, str] | None = None  # fs (Hz) stated in the metadata above the header, and that line
+
+
+# A sampling rate or interval stated in the metadata: "Sample rate: 4000 Hz", "Sampling Frequency = 4 kHz",
+# "Sample Rate (Hz),4000", LabVIEW's "Delta_X<tab>0.000250" (the interval, s).
+_RATE_KEY = r"sample[ _-]?rate|sampling[ _-]?(?:rate|frequency)|sample[ _-]?frequency|scan[ _-]?rate|fs"
+_STEP_KEY = r"delta[ _]?x|delta[ _]?t|sample[ _-]?interval|sampling[ _-]?interval|dt|time[ _-]?step"
+_RATE_LINE = re.compile(
+    rf'^\s*"?(?P<key>{_RATE_KEY}|{_STEP_KEY})"?\s*(?:[\[(](?P<u1>[^\])]*)[\])])?\s*"?\s*[:=\t,;]\s*"?'
+    r"(?P<value>[0-9]+(?:[.,][0-9]*)?(?:[eE][-+]?[0-9]+)?)\s*(?P<u2>[a-zA-Zµμ/]+)?",
+    re.IGNORECASE,
+)
+_RATE_UNITS = {"hz": 1.0, "khz": 1e3, "s/s": 1.0, "sa/s": 1.0, "samples/s": 1.0, "ks/s": 1e3, "/s": 1.0, "1/s": 1.0}
+_STEP_UNITS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6}
+
+
+def stated_rate(lines: list[str], path: Path) -> tuple[float, str] | None:
+    """fs (Hz) that metadata lines state (a rate, or an interval such as LabVIEW's ``Delta_X``), with the line
+    it came from; None if none does; two lines stating different rates are an error naming both."""
+    found: list[tuple[float, str]] = []
+    for line in lines:
+        match = _RATE_LINE.match(line)
+        if not match:
+            continue
+        value = float(match.group("value").replace(",", "."))
+        unit = (match.group("u1") or match.group("u2") or "").strip().lower()
+        interval = re.fullmatch(_STEP_KEY, match.group("key"), re.IGNORECASE) is not None
+        factor = (_STEP_UNITS if interval else _RATE_UNITS).get(unit or ("s" if interval else "hz"))
+        if factor is None or value <= 0:
+            continue  # a unit that is not a rate or an interval (e.g. "fs: 16 bit"): not the clock
+        found.append((1.0 / (value * factor) if interval else value * factor, line.strip()))
+    for fs, line in found[1:]:
+        if abs(fs - found[0][0]) > 1e-9 * fs:
+            raise ValueError(f"{path.name} states two sampling rates: {found[0][1]!r} ({found[0][0]:.10g} Hz) and "
+                             f"{line!r} ({fs:.10g} Hz); pass fs= (Hz; on the command line --fs)")  # fmt: skip
+    return found[0] if found else None
 
 
 def _numeric(field: str, decimal_comma: bool) -> bool:
@@ -118,10 +155,12 @@ def sniff(path: Path) -> _Dialect:
             else:  # no header row: columns by index
                 names = [f"column {c}" for c in range(width)]
             skip = kept[start]
+            header = kept[start - (2 if units_row else 1)] if start >= 1 and not names[0] == "column 0" else skip
+            rate = stated_rate(lines[:header], path)
             percent = any(line.lstrip().startswith("%") for line in lines[skip:])
             body = [lines[j] for j in kept[start:]]
             line_bytes = max(16, int(np.mean([len(line) + 1 for line in body])))
-            return _Dialect(delimiter, decimal_comma, names, skip, percent, line_bytes)
+            return _Dialect(delimiter, decimal_comma, names, skip, percent, line_bytes, rate)
     raise ValueError(f"{path.name}: could not read it as a table (rows of numbers separated by ',', ';', tabs or "
                      "blanks, after an optional header row naming the columns)")  # fmt: skip
 
@@ -158,6 +197,14 @@ def _load_text(
     if t_index is not None and row >= 2:
         found = fs_from_time(out[2], path, names[t_index], _scale(names[t_index], "time", path))
         origin = f"time column {names[t_index]!r}"
+    if dialect.rate is not None:
+        stated, line = dialect.rate
+        if found is not None and abs(stated - found) > 1e-3 * found:
+            raise ValueError(f"{path.name}: its {origin} gives fs {found:.10g} Hz but its metadata line {line!r} "
+                             f"states {stated:.10g} Hz; pass fs= (Hz; on the command line --fs) and time=None to "
+                             "choose")  # fmt: skip
+        if found is None:
+            found, origin = stated, f"metadata line {line!r}"
     fs = _agree(fs, found, path, origin, names)
     force_values = out[0]
     displacement_values = out[1]
