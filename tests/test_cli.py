@@ -264,3 +264,17 @@ def test_a_missing_value_is_still_a_usage_error(capsys) -> None:
         cli.main(["run", "--kyx", "--two-axis"])
     assert exit_info.value.code == 2
     assert "--kyx" in capsys.readouterr().err
+
+
+def test_the_default_sweep_file_needs_no_extra(capsys, tmp_path, monkeypatch) -> None:
+    """Without the xarray extra, `amb-fast sweep` with no --out failed ("--out .nc needs h5netcdf") although no
+    option asked for NetCDF: the default is then sweep.npz."""
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "xarray" else real(name, *a))
+    monkeypatch.chdir(tmp_path)
+    status, out, _ = run(capsys, "sweep", "--kp", "2000", "--periods", "2", "--no-progress")
+    assert status == 0 and "wrote sweep.npz" in out
+    assert af.load_sweep(tmp_path / "sweep.npz").status.tolist() == ["ok"]
+    assert not (tmp_path / "sweep.nc").exists()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 from collections.abc import Sequence
 from pathlib import Path
@@ -154,6 +155,9 @@ def _swept(args: argparse.Namespace, controller: AnyController) -> dict[str, Any
 
 
 def cmd_sweep(args: argparse.Namespace) -> None:
+    if args.out is None:  # NetCDF only where its extra is installed: no option asked for it
+        netcdf = all(importlib.util.find_spec(m) is not None for m in ("h5netcdf", "xarray"))
+        args.out = "sweep.nc" if netcdf else "sweep.npz"
     out = check_output(Path(args.out), "--out", SWEEP_SUFFIXES, args.overwrite)
     if out.suffix.lower() == ".nc":
         _needs("h5netcdf", "xarray", "--out .nc")
