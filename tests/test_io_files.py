@@ -191,3 +191,15 @@ def test_mega_is_not_milli(tmp_path, channels) -> None:
     rec = af.load_recording(path, force="force", displacement="disp")  # KN and MM: kN and mm, whatever the case
     np.testing.assert_allclose(rec.force, f * 1e6, rtol=1e-12)
     np.testing.assert_allclose(rec.displacement, y, rtol=1e-12)
+
+
+def test_an_empty_or_cut_tdms_file_says_so(tmp_path) -> None:
+    """Was "x.tdms holds several recordings []: choose one with recording=NAME"."""
+    nptdms = pytest.importorskip("nptdms")
+    path = tmp_path / "x.tdms"
+    with nptdms.TdmsWriter(path) as writer:
+        writer.write_segment([nptdms.ChannelObject("g", "force", np.ones(100)),
+                              nptdms.ChannelObject("g", "displacement", np.ones(100))])  # fmt: skip
+    path.write_bytes(path.read_bytes()[:10])
+    with pytest.raises(ValueError, match=r"x.tdms holds no channels: the file is empty or damaged"):
+        af.load_recording(path, fs=4000.0)

@@ -251,6 +251,9 @@ def _choose_recording(
     groups: dict[str, dict[str, np.ndarray]], path: Path, recording: str | None, keys: tuple[str | int, str | int]
 ) -> tuple[str, dict[str, np.ndarray]]:
     groups = {name: channels for name, channels in groups.items() if channels}
+    if not groups:
+        raise ValueError(f"{path.name} holds no channels: the file is empty or damaged (cut short before its first "
+                         "channel was written)")  # fmt: skip
     if recording is not None:
         require(recording in groups, "recording", recording, f"one of {sorted(groups)} in {path.name}")
         return recording, groups[recording]
