@@ -72,8 +72,8 @@ def test_dead_time_costs_phase_like_exp_minus_j_w_tau(sphs) -> None:
     modified z-transform tends to the continuous delay."""
     rig0, rig1 = replace(QUIET, dead_time=0.0), replace(QUIET, dead_time=0.5 * T)
     f = np.array([5.0, 10.0, 20.0])
-    p0 = af._linear._plant_responses(rig0, 4000.0, f)[1]
-    p1 = af._linear._plant_responses(rig1, 4000.0, f)[1]
+    p0 = af._linear.plant_responses(rig0, 4000.0, f)[1]
+    p1 = af._linear.plant_responses(rig1, 4000.0, f)[1]
     expected = np.exp(-2j * np.pi * f * 0.5 * T)
     assert np.max(np.abs(p1 / p0 - expected)) < 1e-4
 

@@ -43,7 +43,7 @@ from ._linear_poles import (
 )
 from ._linear_response import (
     StabilityMargin,
-    _plant_responses,
+    plant_responses,
     controller_response,
     effective_coefficients,
     iso_zone,
@@ -61,7 +61,7 @@ __all__ = [
     "eigenvalues",
     "_gain_arrays",
     "_unstable_poles",
-    "_plant_responses",
+    "plant_responses",
     "state_response",
     "_unstable_error",
     "zoh",

@@ -75,7 +75,7 @@ def predict(
     if not isinstance(pid, PID):
         raise ValueError(f"kp, ki, kd arrays need a PID controller, got {type(pid).__name__}")
     gains = _gain_arrays(pid, kp, ki, kd)
-    Pf, Pi = _plant_responses(rig, pid.fs, f.ravel())
+    Pf, Pi = plant_responses(rig, pid.fs, f.ravel())
     K = _controller_terms(pid, f.ravel())  # (3, freq): d G / d(kp, ki, kd), delay included
     return Pf / (1.0 - Pi * (gains @ K)) / transducer_response(rig, pid.fs, z)
 
@@ -89,7 +89,7 @@ def transducer_response(rig: Rig, fs: float, z: np.ndarray) -> np.ndarray:
     return (1 - 1 / z) / (1 - a / z)
 
 
-def _plant_responses(rig: Rig, fs: float, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def plant_responses(rig: Rig, fs: float, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Sampled plant responses from force and from current command to the sensor, at ``f`` (Hz)."""
     Phi, Gamma, states = discrete_plant(rig, fs)
     response = state_response(Phi, Gamma, sensor_row(states), np.exp(2j * np.pi * f / fs))[0]

@@ -68,7 +68,7 @@ def _grid(values: dict[str, ArrayLike], grid: str) -> tuple[dict, dict]:
     return axes, points
 
 
-def _controller_params(controller: AnyController) -> dict[str, float]:
+def controller_params(controller: AnyController) -> dict[str, float]:
     if isinstance(controller, PID):
         return {"kp": controller.kp, "ki": controller.ki, "kd": controller.kd,
                 "derivative_cutoff": controller.derivative_cutoff}  # type: ignore[dict-item]  # fmt: skip
@@ -76,7 +76,7 @@ def _controller_params(controller: AnyController) -> dict[str, float]:
 
 
 def _check_names(rig: Rig, controller: AnyController, names: list[str]) -> None:
-    known = [*RIG_FIELDS, *_controller_params(controller)]
+    known = [*RIG_FIELDS, *controller_params(controller)]
     for name in names:
         require(name in known, "sweep axis", name,
                 f"a numeric Rig field or a controller parameter: one of {', '.join(known)}")  # fmt: skip

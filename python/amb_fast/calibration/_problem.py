@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .._linear import _plant_responses, controller_matrices, is_controller, state_response, transducer_response
+from .._linear import plant_responses, controller_matrices, is_controller, state_response, transducer_response
 from .._params import Rig
 from ..controllers import as_controller
 
@@ -206,7 +206,7 @@ class _Model:
             self.G.append(G)
 
     def __call__(self, rig: Rig) -> list[np.ndarray]:
-        Pf, Pu = _plant_responses(rig, self.fs, self.freq)
+        Pf, Pu = plant_responses(rig, self.fs, self.freq)
         Tr = transducer_response(rig, self.fs, self.z)
         return [(1.0 - Pu[rows] * G) * Tr[rows] / Pf[rows] for rows, G in zip(self.index, self.G)]
 

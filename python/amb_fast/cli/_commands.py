@@ -14,7 +14,7 @@ import numpy as np
 from .._experiment import Estimate, identify, run_experiment
 from .._linear import AnyController, closed_loop_poles, require_stable, stability_margin
 from .._params import Rig
-from .._sweep import RIG_FIELDS, _controller_params, sweep
+from .._sweep import RIG_FIELDS, controller_params, sweep
 from .._sweep_result import SWEPT
 from .._validate import integer
 from ..claims import natural_frequency
@@ -133,7 +133,7 @@ def _swept(args: argparse.Namespace, controller: AnyController) -> dict[str, Any
     (a Rig field or a controller parameter), in the order given; refused before any work when a name is unknown,
     given twice, or also set to one value by its own option."""
     axes: dict[str, Any] = {n: getattr(args, n) for n in ("kp", "ki", "kd") if getattr(args, n) is not None}
-    known = [*RIG_FIELDS, *_controller_params(controller)]
+    known = [*RIG_FIELDS, *controller_params(controller)]
     for item in args.vary:
         name, equals, text = item.partition("=")
         name = name.strip().replace("-", "_")

@@ -176,15 +176,13 @@ def second_order(
 def pid_controller(pid: PID) -> Controller:
     """The digital PID of ``pid`` as a :class:`Controller` (behind ``PID.to_controller()``).
 
-    The state space is exactly ``_linear.controller_matrices`` of the PID without its delay (integral,
-    derivative memory and filter states only where they carry something); ``pid.delay`` becomes
+    The state space is exactly :meth:`PID.state_space` (the PID without its delay: integral, derivative
+    memory and filter states only where they carry something); ``pid.delay`` becomes
     :attr:`Controller.delay`. Continuous design ``kp + ki/s + kd s/(1 + s/wd)``, ``wd = 2 pi
     derivative_cutoff`` (``kd s`` without a cutoff). Parameters ``kp``, ``ki``, ``kd``,
     ``derivative_cutoff`` (``inf`` when there is no derivative filter; setting ``inf`` removes it).
     """
-    from .._linear import controller_matrices  # lazily: _linear may come to import this package
-
-    ss = controller_matrices(replace(pid, delay=0))
+    ss = pid.state_space()
     kp, ki, kd = pid.kp, pid.ki, pid.kd
     if pid.derivative_cutoff is None:
         num, den = [kd, kp, ki], [1.0, 0.0]
