@@ -43,10 +43,10 @@ from ._linear_poles import (
 )
 from ._linear_response import (
     StabilityMargin,
-    plant_responses,
     controller_response,
     effective_coefficients,
     iso_zone,
+    plant_responses,
     predict,
     sensitivity,
     stability_margin,

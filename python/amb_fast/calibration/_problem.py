@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .._linear import plant_responses, controller_matrices, is_controller, state_response, transducer_response
+from .._linear import controller_matrices, is_controller, plant_responses, state_response, transducer_response
 from .._params import Rig
 from ..controllers import as_controller
 
