@@ -203,3 +203,15 @@ def test_an_empty_or_cut_tdms_file_says_so(tmp_path) -> None:
     path.write_bytes(path.read_bytes()[:10])
     with pytest.raises(ValueError, match=r"x.tdms holds no channels: the file is empty or damaged"):
         af.load_recording(path, fs=4000.0)
+
+
+def test_a_header_with_fewer_names_than_columns_is_named_in_the_error(tmp_path, channels) -> None:
+    """A header naming 2 of 3 columns was silently taken for no header ("no header row naming its 3 columns")."""
+    t, f, y = channels
+    path = tmp_path / "short.csv"
+    write(path, "force,displacement\n", [t, f, y], ["%.6f", "%.17g", "%.17g"])
+    with pytest.raises(ValueError, match=r"no header row naming its 3 columns \(the row above the data, "
+                                         r"'force,displacement', has fewer names than the 3 data columns"):  # fmt: skip
+        af.load_recording(path)
+    rec = af.load_recording(path, force=1, displacement=2, time=0)  # by index, every sample kept
+    np.testing.assert_array_equal(rec.force, f)

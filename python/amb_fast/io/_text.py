@@ -34,6 +34,7 @@ class _Dialect:
     comment_percent: bool = False  # '%' comment lines among the data
     line_bytes: int = 64  # typical length of a data line
     rate: tuple[float, str] | None = None  # fs (Hz) stated in the metadata above the header, and that line
+    above: str = ""  # with no header: the non-numeric row just above the data, when it has too few names
 
 
 # A sampling rate or interval stated in the metadata: "Sample rate: 4000 Hz", "Sampling Frequency = 4 kHz",
@@ -146,6 +147,7 @@ def sniff(path: Path) -> _Dialect:
                 for u in before[1]
                 if u.strip()
             )
+            above = ""
             if units_row:  # a header, then a units row
                 names = [n.strip() for n in before[0]]
                 units = [u.strip().strip("[]()") for u in before[1]]
@@ -154,13 +156,14 @@ def sniff(path: Path) -> _Dialect:
                 names = [n.strip() for n in rows[start - 1][:width]]
             else:  # no header row: columns by index
                 names = [f"column {c}" for c in range(width)]
+                above = lines[kept[start - 1]].strip() if start >= 1 and 2 <= len(rows[start - 1]) < width else ""
             skip = kept[start]
             header = kept[start - (2 if units_row else 1)] if start >= 1 and not names[0] == "column 0" else skip
             rate = stated_rate(lines[:header], path)
             percent = any(line.lstrip().startswith("%") for line in lines[skip:])
             body = [lines[j] for j in kept[start:]]
             line_bytes = max(16, int(np.mean([len(line) + 1 for line in body])))
-            return _Dialect(delimiter, decimal_comma, names, skip, percent, line_bytes, rate)
+            return _Dialect(delimiter, decimal_comma, names, skip, percent, line_bytes, rate, above)
     raise ValueError(f"{path.name}: could not read it as a table (rows of numbers separated by ',', ';', tabs or "
                      "blanks, after an optional header row naming the columns)")  # fmt: skip
 
@@ -176,8 +179,10 @@ def _load_text(
         columns = [_index(names, force, "force", path), _index(names, displacement, "displacement", path)]
     except ValueError as error:
         if headerless:
-            raise ValueError(f"{path.name} has no header row naming its {len(names)} columns: choose the force and "
-                             "the displacement by 0-based index (force=1, displacement=2, and the time column, "
+            short = (f" (the row above the data, {dialect.above!r}, has fewer names than the {len(names)} data "
+                     "columns: which column each names is not known)") if dialect.above else ""  # fmt: skip
+            raise ValueError(f"{path.name} has no header row naming its {len(names)} columns{short}: choose the force "
+                             "and the displacement by 0-based index (force=1, displacement=2, and the time column, "
                              "if any, time=0; on the command line --force 1 --displacement 2 --time 0)") \
                 from error  # fmt: skip
         raise
