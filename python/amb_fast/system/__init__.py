@@ -15,6 +15,7 @@ from .._mechanics import Mechanics
 from ._campbell import Campbell, campbell
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
 from ._experiment import EstimateN, TraceN, hadamard_signs, run_experiment, simulate
+from ._identify import identify
 from ._model import (
     LoopModel,
     StabilityMarginN,
@@ -40,6 +41,7 @@ __all__ = [
     "UnbalanceResponse",
     "campbell",
     "hadamard_signs",
+    "identify",
     "identify_sensitivity",
     "measure_sensitivity",
     "run_experiment",
