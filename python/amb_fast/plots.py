@@ -328,8 +328,10 @@ def plot_coefficients_n(
     elif terms == "direct":
         entries = [(i, i) for i in range(N)]
     else:
-        ok = isinstance(terms, list) and bool(terms) and all(
-            isinstance(t, tuple) and len(t) == 2 and t[0] in names and t[1] in names for t in terms
+        ok = (
+            isinstance(terms, list)
+            and bool(terms)
+            and all(isinstance(t, tuple) and len(t) == 2 and t[0] in names and t[1] in names for t in terms)
         )
         require(ok, "terms", terms, f"'all', 'direct', 'cross' or a list of (out, in) pairs of the axes {names}")
         entries = [(names.index(a), names.index(b)) for a, b in terms]
@@ -344,10 +346,13 @@ def plot_coefficients_n(
     k, c = (estimate.k_smooth, estimate.c_smooth) if smoothed else (estimate.k, estimate.c)
     for cell in axes.ravel():
         cell.set_visible(False)
+    panels = (
+        (0, k, estimate.k, estimate.k_std, 1e3, "k", "kN/m"),
+        (1, c, estimate.c, estimate.c_std, 1.0, "c", "N s/m"),
+    )
     for n, (i, j) in enumerate(entries):
         top, column = (2 * i, j) if grid else (0, n)
-        for row, values, raw, std, scale, symbol, unit in ((0, k, estimate.k, estimate.k_std, 1e3, "k", "kN/m"),
-                                                            (1, c, estimate.c, estimate.c_std, 1.0, "c", "N s/m")):  # fmt: skip
+        for row, values, raw, std, scale, symbol, unit in panels:
             ax = axes[top + row, column]
             ax.set_visible(True)
             ax.plot(f, values[:, i, j] / scale, color="C0", lw=1.2, label="actual")

@@ -179,7 +179,6 @@ def load_estimate(path: str | Path) -> Estimate | EstimateN:
     """Read an estimate written by :meth:`Estimate.save` (``.csv`` or ``.nc``) or :meth:`EstimateN.save`
     (``.csv``, ``.nc`` or ``.npz``: an :class:`EstimateN`); a damaged file is refused, naming it."""
     from .._experiment import Estimate, UnexcitedLines
-
     from ..system import _results as n_axes  # estimates of N axes: the file says which kind it holds
 
     path = Path(path)

@@ -41,16 +41,18 @@ def _from_recordings(recordings: Any, names: tuple[str, ...], fs: float | None) 
             f"{N} experiments (one per axis), each a list of {N} Recordings (axes {axes}); or force and "
             "displacement arrays")  # fmt: skip
     for e, experiment in enumerate(recordings):
-        ok = isinstance(experiment, (list, tuple)) and len(experiment) == N
-        require(ok and all(isinstance(r, Recording) for r in experiment), f"recordings[{e}]",
-                type(experiment).__name__, f"a list of {N} amb_fast.Recording (axes {axes})")  # fmt: skip
+        listed = isinstance(experiment, (list, tuple))
+        ok = listed and len(experiment) == N and all(isinstance(r, Recording) for r in experiment)
+        got = [type(r).__name__ for r in experiment] if listed else type(experiment).__name__
+        require(ok, f"recordings[{e}]", got, f"a list of {N} amb_fast.Recording (axes {axes})")
     first = recordings[0][0]
     for e, experiment in enumerate(recordings):
         for j, rec in enumerate(experiment):
             require(abs(rec.fs - first.fs) <= 1e-9 * first.fs, f"recordings[{e}][{j}].fs", rec.fs,
                     f"{first.fs} Hz like recordings[0][0] (one clock for every channel)")  # fmt: skip
-            require(rec.force.size == experiment[0].force.size, f"recordings[{e}][{j}] length", rec.force.size,
-                    f"{experiment[0].force.size} samples like recordings[{e}][0] (one acquisition per experiment)")  # fmt: skip
+            size = experiment[0].force.size
+            require(rec.force.size == size, f"recordings[{e}][{j}] length", rec.force.size,
+                    f"{size} samples like recordings[{e}][0] (one acquisition per experiment)")  # fmt: skip
     forces = [np.column_stack([r.force for r in experiment]) for experiment in recordings]
     displacements = [np.column_stack([r.displacement for r in experiment]) for experiment in recordings]
     if fs is not None:
@@ -138,17 +140,18 @@ def identify(
     n = min(x.shape[0] for x in forces)
     whole = start + max(0, n - start) // period * period
     require((whole - start) // period >= 2, "periods after settling", (whole - start) // period,
-            f">= 2 (standard errors need at least two; {n} samples of {period} a period, {start} settling)")  # fmt: skip
+            f">= 2 (standard errors need two; {n} samples, {period} a period, {start} settling)")  # fmt: skip
     dropped = sum(x.shape[0] - whole for x in forces)
     if dropped:
-        warnings.warn(f"recordings are not a whole number of periods of {period} samples: dropped {dropped} samples "
-                      f"(over the {N} experiments) after the last whole period", IdentificationWarning, stacklevel=2)  # fmt: skip
+        warnings.warn(f"recordings are not a whole number of periods of {period} samples: dropped {dropped} "
+                      f"samples (over the {N} experiments) after the last whole period", IdentificationWarning,
+                      stacklevel=2)  # fmt: skip
     F, Y = (np.stack([x[start:whole] for x in xs]) for xs in (forces, displacements))
     for name, x in (("force", F), ("displacement", Y)):
         bad = np.argwhere(~np.isfinite(x))
         if bad.size:
             e, s, j = bad[0]
-            raise ValueError(f"{name} must be finite, got {x[e, s, j]!r} in experiment {e}, axis {names[j]}, "
+            raise ValueError(f"{name} must be finite, got {float(x[e, s, j])!r} in experiment {e}, axis {names[j]}, "
                              f"sample {s + start}")  # fmt: skip
     harmonics = _lines(F[0, :, 0], period, f0, fs, f_max, lines, offset=start)
     Fp, Yp = _spectra(F, harmonics, period), _spectra(Y, harmonics, period)

@@ -200,7 +200,8 @@ def sweep_to_xarray(result: SweepResultN):  # noqa: ANN201 - xarray is optional
     coords = {name: (("point",), values, {"units": _param_unit(name)}) for name, values in result.params.items()}
     coords |= {"freq": (("freq",), result.freq, {"units": "Hz"}), "out": (("out",), names, {}),
                "in": (("in",), names, {})}  # fmt: skip
-    attrs = {"amb_fast_kind": "SweepResultN", "params": json.dumps(list(result.params)), "axes": json.dumps(list(names))}
+    attrs = {"amb_fast_kind": "SweepResultN", "params": json.dumps(list(result.params)),
+             "axes": json.dumps(list(result.axes))}  # fmt: skip
     return _xarray().Dataset(data, coords=coords, attrs=attrs)
 
 
