@@ -51,6 +51,7 @@ def test_noise_free_recordings_give_run_experiments_estimate(speed: float) -> No
     # the rotor alone (its RigidRotor or its Mechanics) is structure enough, and the lines are found
     _assert_same(system.identify(F, Y, fs=SPHS.fs, f0=SPHS.f0, rig=rig.rotor, settle_periods=settle), ref)
     _assert_same(system.identify(F, Y, fs=SPHS.fs, f0=SPHS.f0, rig=rig.mechanics(), settle_periods=settle), ref)
+    _assert_same(af.identify(F, Y, fs=SPHS.fs, f0=SPHS.f0, rig=rig, settle_periods=settle), ref)  # routed by shape
 
 
 def test_automatic_settling_and_recordings_as_recording_objects() -> None:

@@ -191,3 +191,13 @@ def test_plot_refuses_unknown_terms_and_effective_shapes(rotor_estimate) -> None
         rotor_estimate.plot(terms=[("A.x", "C.x")])
     with pytest.raises(ValueError, match=r"effective must be \(K_eff, C_eff\), each of shape \(10, 4, 4\)"):
         rotor_estimate.plot(effective=(rotor_estimate.k[:, :2, :2], rotor_estimate.c[:, :2, :2]))
+
+
+def test_fit_command_refuses_an_estimate_of_n_axes(rotor_estimate, tmp_path, capsys) -> None:
+    """Before: amb-fast fit of an EstimateN's file failed on a missing attribute (AttributeError: blocks)."""
+    from cli_helpers import one_error_line, run
+
+    path = rotor_estimate.save(tmp_path / "rotor.csv")
+    status, _, err = run(capsys, "fit", str(path))
+    assert status == 2
+    assert "rotor.csv' holds an estimate of 4 axes; the fit takes a one-axis estimate" in one_error_line(err)

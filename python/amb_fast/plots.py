@@ -328,13 +328,10 @@ def plot_coefficients_n(
     elif terms == "direct":
         entries = [(i, i) for i in range(N)]
     else:
-        ok = (
-            isinstance(terms, list)
-            and bool(terms)
-            and all(isinstance(t, tuple) and len(t) == 2 and t[0] in names and t[1] in names for t in terms)
-        )
+        pairs = terms if isinstance(terms, list) else []
+        ok = bool(pairs) and all(isinstance(t, tuple) and len(t) == 2 and set(t) <= set(names) for t in pairs)
         require(ok, "terms", terms, f"'all', 'direct', 'cross' or a list of (out, in) pairs of the axes {names}")
-        entries = [(names.index(a), names.index(b)) for a, b in terms]
+        entries = [(names.index(a), names.index(b)) for a, b in pairs]
     if effective is not None:
         shapes = [np.shape(m) for m in effective] if isinstance(effective, (tuple, list)) else []
         require(shapes == [estimate.k.shape] * 2, "effective", shapes or type(effective).__name__,

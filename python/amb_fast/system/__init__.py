@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import sys
 
-from .._dispatch import register
+from .._dispatch import register, register_recordings
 from .._mechanics import Mechanics
 from ._campbell import Campbell, campbell
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
@@ -72,3 +72,5 @@ __all__ = [
 
 # af.predict(rotor_rig, ...) and its siblings run the N-axis functions of this namespace.
 register(RotorRig, sys.modules[__name__])
+# af.identify(force, displacement, rig=...) of a rotor's four experiments, (4, samples, 4), runs identify.
+register_recordings(4, identify)

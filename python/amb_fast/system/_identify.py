@@ -26,7 +26,7 @@ MAX_CONDITION = 1e6
 
 
 def _mechanics(rig: Any) -> Mechanics:  # noqa: ANN401 - any structure with mechanics()
-    mech = rig if isinstance(rig, Mechanics) else getattr(rig, "mechanics", lambda: None)()
+    mech: Any = rig if isinstance(rig, Mechanics) else getattr(rig, "mechanics", lambda: None)()
     require(isinstance(mech, Mechanics), "rig", type(rig).__name__,
             "a RotorRig, a RigidRotor, a TwoAxisRig or their Mechanics (the structure whose readout, mass and "
             "gyroscopic matrices the estimate uses)")  # fmt: skip

@@ -124,9 +124,9 @@ def save_estimate(est: EstimateN, path: str | Path) -> Path:
     if suffix == ".nc":
         write_dataset_netcdf(path, *estimate_parts(est))
     elif suffix == ".npz":
-        header = json.dumps({"kind": KIND, "periods": est.periods, "axes": list(est.axes), "version": version()})
-        with atomic_path(path) as target, open(target, "wb") as handle:
-            np.savez_compressed(handle, header=header, freq=est.freq, **_fields(est))
+        _write_npz(
+            path, {"kind": KIND, "periods": est.periods, "axes": list(est.axes)}, {"freq": est.freq, **_fields(est)}
+        )
     else:
         columns = _long(_fields(est), est.freq, np.arange(len(est.axes)))
         meta = json.dumps({"periods": est.periods, "axes": list(est.axes)})
@@ -135,6 +135,12 @@ def save_estimate(est: EstimateN, path: str | Path) -> Path:
         body = "\n".join(lines) + "\n"
         atomic_text(path, f"# sha256: {digest([body.encode()])}\n" + body)
     return path
+
+
+def _write_npz(path: Path, header: dict[str, Any], arrays: dict[str, Any]) -> None:
+    """Arrays and a JSON ``header`` (with the amb_fast version) in a compressed ``.npz``, written atomically."""
+    with atomic_path(path) as target, open(target, "wb") as handle:
+        np.savez_compressed(handle, header=json.dumps(header | {"version": version()}), **arrays)
 
 
 def _build(freq: np.ndarray, arrays: dict[str, np.ndarray], periods: int, axes: list[str]) -> EstimateN:
@@ -193,7 +199,7 @@ def sweep_to_xarray(result: SweepResultN):  # noqa: ANN201 - xarray is optional
     """An ``xarray.Dataset`` over ``(point, freq, out, in)``; the swept paths are coordinates along ``point``
     (with their units), and ``status``, ``stable``, ``seeds`` per point."""
     names = np.array(result.axes)
-    data = {name: (("point", "freq", "out", "in"), getattr(result, name),
+    data: dict[str, tuple] = {name: (("point", "freq", "out", "in"), getattr(result, name),
                    {"units": UNITS[name]}) for name in _SWEEP}  # fmt: skip
     data |= {"stable": (("point",), result.stable, {}), "seeds": (("point",), result.seeds, {}),
              "status": (("point",), sweep_status(result), {})}  # fmt: skip
@@ -226,11 +232,9 @@ def save_sweep(result: SweepResultN, path: str | Path) -> Path:
             ds[part].attrs = dict(ds.receptance.attrs)
         write_netcdf(ds.drop_vars("receptance"), path)
     else:
-        header = json.dumps({"kind": "SweepResultN", "params": list(result.params), "axes": list(result.axes)})
         arrays = {f"param_{i}": values for i, values in enumerate(result.params.values())}
-        with atomic_path(path) as target, open(target, "wb") as handle:
-            np.savez_compressed(handle, header=header, freq=result.freq, stable=result.stable, seeds=result.seeds,
-                                **{n: getattr(result, n) for n in _SWEEP}, **arrays)  # fmt: skip
+        arrays |= {name: getattr(result, name) for name in ("freq", "stable", "seeds", *_SWEEP)}
+        _write_npz(path, {"kind": "SweepResultN", "params": list(result.params), "axes": list(result.axes)}, arrays)
     return path
 
 
