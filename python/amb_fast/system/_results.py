@@ -117,7 +117,12 @@ def estimate_to_dataframe(est: EstimateN):  # noqa: ANN201 - pandas is optional
 
 
 def save_estimate(est: EstimateN, path: str | Path) -> Path:
-    """Write atomically to ``.nc``, ``.npz`` or ``.csv`` (see the module docstring)."""
+    """Write atomically (the old file stays whole if the write fails) to ``.nc`` (NetCDF through h5netcdf:
+    fletcher32 per variable, SHA-256s of the variables and of the bytes), ``.npz`` (zip's CRC-32 per array) or
+    ``.csv`` (one row per line and entry ``i, j`` (0-based), every value to 17 digits, ``force`` and
+    ``displacement`` as ``[channel i, experiment j]``; a SHA-256 in its first line). Returns the path;
+    :func:`amb_fast.load_estimate` reads any of them back equal to this estimate, and refuses a damaged one
+    naming the file."""
     path = Path(path)
     suffix = path.suffix.lower()
     require(suffix in SUFFIXES, "path", str(path), "a file name ending in .nc, .npz or .csv")
