@@ -21,7 +21,7 @@ from .._sweep_result import unit_of
 from .._validate import require
 from ..io._atomic import atomic_path, atomic_text
 from ..io._netcdf import read_netcdf, write_dataset_netcdf, write_netcdf
-from ..io._results import UNITS, digest, read_npz, version
+from ..io._results import UNITS, _pandas, digest, read_npz, version
 
 if TYPE_CHECKING:
     from ._experiment import EstimateN
@@ -98,12 +98,6 @@ def _long(matrices: dict[str, np.ndarray], freq: np.ndarray, names: Any) -> dict
         else:
             columns[_column(name)] = values.ravel()
     return columns
-
-
-def _pandas():  # noqa: ANN202
-    from ..io._results import _pandas
-
-    return _pandas()
 
 
 def estimate_to_dataframe(est: EstimateN):  # noqa: ANN201 - pandas is optional
