@@ -201,3 +201,20 @@ def test_fit_command_refuses_an_estimate_of_n_axes(rotor_estimate, tmp_path, cap
     status, _, err = run(capsys, "fit", str(path))
     assert status == 2
     assert "rotor.csv' holds an estimate of 4 axes; the fit takes a one-axis estimate" in one_error_line(err)
+
+
+def test_each_loader_refuses_the_others_files(rotor_estimate, rotor_sweep, tmp_path) -> None:
+    """Before: load_sweep of an estimate's file raised KeyError 'grid' (.nc) or 'status' (.npz), load_estimate of
+    a sweep's .nc KeyError 'amb_fast'."""
+    one_sweep = af.sweep(af.Rig.paper(), af.PID.paper(), af.schroeder_multisine(f_max=20.0), kd=[2.0], periods=2,
+                         progress=False)  # fmt: skip
+    for suffix in (".nc", ".npz"):
+        estimate_file = rotor_estimate.save(tmp_path / f"est{suffix}")
+        with pytest.raises(ValueError, match=rf"path must be a file written by SweepResult.save .*est\{suffix}'"):
+            af.load_sweep(estimate_file)
+        with pytest.raises(ValueError, match=r"path must be a(n .npz| .nc) file written by SweepResultN.save"):
+            system.SweepResultN.load(estimate_file)
+        for sweep in (one_sweep, rotor_sweep):
+            sweep.save(tmp_path / f"sweep{suffix}")
+            with pytest.raises(ValueError, match=r"path must be a(n .npz| .nc) file written by Estimate"):
+                af.load_estimate(tmp_path / f"sweep{suffix}")

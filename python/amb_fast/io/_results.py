@@ -217,6 +217,8 @@ def load_estimate(path: str | Path) -> Estimate | EstimateN:
         ds = read_netcdf(path)
         if ds.attrs.get("amb_fast_kind") == n_axes.KIND:
             return n_axes.estimate_from_dataset(ds)
+        require("amb_fast" in ds.attrs, "path", str(path), "a .nc file written by Estimate.save or EstimateN.save "
+                "(this one holds another dataset: a sweep's loads with load_sweep or SweepResultN.load)")  # fmt: skip
         meta = json.loads(ds.attrs["amb_fast"])
         arrays = {n: np.asarray(ds[n].values) for n in _REAL}
         for n in ("H", "force", "displacement"):
