@@ -184,7 +184,9 @@ def load_estimate(path: str | Path) -> Estimate | EstimateN:
     path = Path(path)
     require(path.is_file(), "path", str(path), "an existing file")
     suffix = path.suffix.lower()
-    require(suffix in (*ESTIMATE_SUFFIXES, ".npz"), "path", str(path), "a file name ending in .csv, .nc or .npz")
+    require(
+        suffix in (*ESTIMATE_SUFFIXES, ".npz"), "path", str(path), "a file name ending in .csv or .nc, or .npz (N axes)"
+    )
     if suffix == ".npz":
         return n_axes.load_estimate(path)
     if suffix == ".csv":
