@@ -77,7 +77,15 @@ from .two_axis import Estimate2, TwoAxisRig, plot_coefficients2
 if TYPE_CHECKING:
     from .calibration import Design, RigFit, design_controller, fit_rig
 
-_PLOTS = ("plot_actual", "plot_coefficients", "plot_effective", "plot_estimate", "plot_family", "plot_overlay")
+_PLOTS = (
+    "plot_actual",
+    "plot_coefficients",
+    "plot_coefficients_n",
+    "plot_effective",
+    "plot_estimate",
+    "plot_family",
+    "plot_overlay",
+)
 _CALIBRATION = ("Design", "RigFit", "design_controller", "fit_rig")
 
 
@@ -169,6 +177,7 @@ __all__ = [
     "plot_actual",
     "plot_coefficients",
     "plot_coefficients2",
+    "plot_coefficients_n",
     "plot_effective",
     "plot_estimate",
     "plot_family",

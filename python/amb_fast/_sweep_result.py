@@ -234,6 +234,12 @@ _ARRAYS = ("freq", "H", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std", "sta
            "unexcited_freq", "unexcited_displacement")  # fmt: skip
 
 
+# What load_sweep says of another amb_fast file given to it.
+_NOT_A_SWEEP = (
+    "a file written by SweepResult.save (estimates load with load_estimate, sweeps of N axes with SweepResultN.load)"
+)
+
+
 def load_sweep(path: str | Path) -> SweepResult:
     """Read a sweep written by :meth:`SweepResult.save` (``.nc`` or ``.npz``).
 
@@ -272,6 +278,7 @@ def load_sweep(path: str | Path) -> SweepResult:
     if path.suffix == ".npz":
         f = read_npz(path)  # a damaged member fails its CRC-32 and is refused
         header = json.loads(str(f["header"]))
+        require("grid" in header, "path", str(path), _NOT_A_SWEEP)
         arrays = {name: f[name] for name in _ARRAYS}
         points = {k[6:]: f[k] for k in f if k.startswith("point_")}
         axes = {k[5:]: f[k] for k in f if k.startswith("axis_")}
@@ -284,6 +291,7 @@ def load_sweep(path: str | Path) -> SweepResult:
     if path.suffix != ".nc":
         raise ValueError(f"path must end in .nc or .npz, got {str(path)!r}")
     ds = read_netcdf(path)  # refuses a file whose checksums do not match
+    require("grid" in ds.attrs, "path", str(path), _NOT_A_SWEEP)
     grid = ds.attrs["grid"]
     names = json.loads(ds.attrs["axes"]) if "axes" in ds.attrs else [n for n in SWEPT if n in ds.coords]
     n_dims = len(names) if grid == "product" else 1

@@ -16,12 +16,15 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ._validate import require
+
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from ._experiment import Estimate
     from ._study import PaperStudy
     from ._sweep_result import SweepResult
+    from .system import EstimateN
 
 LABELS = {"kp": ("K_p", "A/m"), "ki": ("K_i", "A/(m s)"), "kd": ("K_d", "A s/m")}
 FENCE = 3.0  # interquartile ranges beyond the quartiles where a damping value counts as far outside the rest
@@ -282,5 +285,86 @@ def plot_estimate(estimate: Estimate, *, title: str = "Identified stiffness, dam
     _damping_scale(axes[1], f, [estimate.c_smooth, estimate.c])
     axes[0].legend(fontsize=8)
     axes[0].set_title(title)
+    _tight_layout(fig)
+    return fig
+
+
+def plot_coefficients_n(
+    estimate: EstimateN,
+    *,
+    terms: str | list[tuple[str, str]] = "all",
+    effective: tuple[np.ndarray, np.ndarray] | None = None,
+    smoothed: bool = False,
+) -> Figure:
+    """Stiffness and damping matrices of N axes over frequency: per entry a k panel over a c panel.
+
+    Parameters
+    ----------
+    estimate : EstimateN
+        An estimate of N axes (:func:`amb_fast.run_experiment` of a :class:`~amb_fast.RotorRig`,
+        :func:`amb_fast.system.identify`).
+    terms : {"all", "direct", "cross"} or list of (str, str)
+        Which entries ``[i, j]`` (force of axis i from displacement of axis j): ``"all"`` the N x N grid (16
+        entries, 32 panels for a rotor), ``"direct"`` the N diagonal ones in one row, ``"cross"`` the grid
+        without its diagonal, or a list of ``(out, in)`` axis names (``[("A.x", "B.x")]``) in one row.
+    effective : (K_eff, C_eff), optional
+        Effective matrices at ``estimate.freq`` (N/m, N s/m; shape (lines, N, N)), as
+        :func:`amb_fast.effective_coefficients` returns them: drawn dashed.
+    smoothed : bool
+        Draw the median-filtered ``k_smooth``, ``c_smooth`` instead of the raw ``k``, ``c``; the band is the
+        raw estimate +-2 s.e. either way.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Stiffness in kN/m and damping in N s/m against frequency (Hz, log axis); each panel's first line is
+        the estimate, the next the effective coefficient. Panels titled ``k[A.x, B.x] (kN/m)``.
+    """
+    names = list(estimate.axes)
+    N = len(names)
+    grid = terms in ("all", "cross")
+    if grid:
+        entries = [(i, j) for i in range(N) for j in range(N) if terms == "all" or i != j]
+    elif terms == "direct":
+        entries = [(i, i) for i in range(N)]
+    else:
+        pairs = terms if isinstance(terms, list) else []
+        ok = bool(pairs) and all(isinstance(t, tuple) and len(t) == 2 and set(t) <= set(names) for t in pairs)
+        require(ok, "terms", terms, f"'all', 'direct', 'cross' or a list of (out, in) pairs of the axes {names}")
+        entries = [(names.index(a), names.index(b)) for a, b in pairs]
+    if effective is not None:
+        shapes = [np.shape(m) for m in effective] if isinstance(effective, (tuple, list)) else []
+        require(shapes == [estimate.k.shape] * 2, "effective", shapes or type(effective).__name__,
+                f"(K_eff, C_eff), each of shape {estimate.k.shape} (lines, N, N) at estimate.freq")  # fmt: skip
+    columns = N if grid else len(entries)
+    rows = 2 * (N if grid else 1)
+    fig, axes = _pyplot().subplots(rows, columns, figsize=(3.2 * columns, 2.0 * rows), sharex=True, squeeze=False)
+    f = estimate.freq
+    k, c = (estimate.k_smooth, estimate.c_smooth) if smoothed else (estimate.k, estimate.c)
+    for cell in axes.ravel():
+        cell.set_visible(False)
+    panels = (
+        (0, k, estimate.k, estimate.k_std, 1e3, "k", "kN/m"),
+        (1, c, estimate.c, estimate.c_std, 1.0, "c", "N s/m"),
+    )
+    for n, (i, j) in enumerate(entries):
+        top, column = (2 * i, j) if grid else (0, n)
+        for row, values, raw, std, scale, symbol, unit in panels:
+            ax = axes[top + row, column]
+            ax.set_visible(True)
+            ax.plot(f, values[:, i, j] / scale, color="C0", lw=1.2, label="actual")
+            if effective is not None:
+                ax.plot(f, effective[row][:, i, j] / scale, color="C3", lw=1.2, ls="--", label="effective")
+            lo, hi = raw[:, i, j] - 2 * std[:, i, j], raw[:, i, j] + 2 * std[:, i, j]
+            ax.fill_between(f, lo / scale, hi / scale, color="C0", alpha=0.2, lw=0, label="+-2 s.e.")
+            ax.set_title(f"{symbol}[{names[i]}, {names[j]}] ({unit})", fontsize=8)
+            ax.set_xscale("log")
+            ax.grid(True, which="both", alpha=0.3)
+            ax.tick_params(labelsize=7)
+            ax.xaxis.set_tick_params(labelbottom=True)
+            if row == 1:
+                _damping_scale(ax, f, [values[:, i, j]])
+                ax.set_xlabel("frequency (Hz)", fontsize=7)
+    axes[0, entries[0][1] if grid else 0].legend(fontsize=7)
     _tight_layout(fig)
     return fig

@@ -42,6 +42,10 @@ def read_estimate(path: str | Path, *, blocks: int | None, mass: float) -> Estim
         raise ValueError(f"estimate file {str(path)!r} does not exist")
     if _records(path):
         estimate = load_estimate(path)
+        if not isinstance(estimate, Estimate):  # an EstimateN's file: fitting takes one axis
+            raise ValueError(
+                f"{str(path)!r} holds an estimate of {len(estimate.axes)} axes; the fit takes a one-axis estimate"
+            )
         if blocks is not None and blocks != estimate.blocks:
             raise ValueError(f"--periods {blocks} contradicts {str(path)!r}, which records {estimate.blocks} periods "
                              "averaged; leave --periods out for a file that records them")  # fmt: skip

@@ -22,6 +22,7 @@ from ._atomic import atomic_text
 
 if TYPE_CHECKING:
     from .._experiment import Estimate
+    from ..system import EstimateN
 
 ESTIMATE_SUFFIXES = (".csv", ".nc")
 _COLUMNS = (  # CSV column -> (Estimate field or expression, unit)
@@ -174,14 +175,20 @@ def save_estimate(estimate: Estimate, path: str | Path) -> Path:
     return write_estimate_netcdf(estimate, path)  # with h5netcdf alone: xarray's file, without importing xarray
 
 
-def load_estimate(path: str | Path) -> Estimate:
-    """Read an estimate written by :meth:`Estimate.save` (``.csv`` or ``.nc``); a damaged file is refused."""
+def load_estimate(path: str | Path) -> Estimate | EstimateN:
+    """Read an estimate written by :meth:`Estimate.save` (``.csv`` or ``.nc``) or :meth:`EstimateN.save`
+    (``.csv``, ``.nc`` or ``.npz``: an :class:`EstimateN`); a damaged file is refused, naming it."""
     from .._experiment import Estimate, UnexcitedLines
+    from ..system import _results as n_axes  # estimates of N axes: the file says which kind it holds
 
     path = Path(path)
     require(path.is_file(), "path", str(path), "an existing file")
     suffix = path.suffix.lower()
-    require(suffix in ESTIMATE_SUFFIXES, "path", str(path), "a file name ending in .csv or .nc")
+    require(
+        suffix in (*ESTIMATE_SUFFIXES, ".npz"), "path", str(path), "a file name ending in .csv or .nc, or .npz (N axes)"
+    )
+    if suffix == ".npz":
+        return n_axes.load_estimate(path)
     if suffix == ".csv":
         raw = path.read_bytes()
         first, _, body = raw.partition(b"\n")
@@ -190,6 +197,8 @@ def load_estimate(path: str | Path) -> Estimate:
         if first[10:].strip().decode(errors="replace") != digest([body]):
             raise ValueError(f"{path.name} is damaged: its content does not match its SHA-256 checksum")
         text = body.decode()
+        if text.startswith(n_axes.CSV_HEAD):
+            return n_axes.estimate_from_csv(text, path.name)
         meta = json.loads(next(line for line in text.splitlines() if line.startswith("# meta: "))[8:])
         table = _csv_rows(text)
         col = {name: table[:, j] for j, name in enumerate(_COLUMNS)}
@@ -208,6 +217,10 @@ def load_estimate(path: str | Path) -> Estimate:
         from ._netcdf import read_netcdf
 
         ds = read_netcdf(path)
+        if ds.attrs.get("amb_fast_kind") == n_axes.KIND:
+            return n_axes.estimate_from_dataset(ds)
+        require("amb_fast" in ds.attrs, "path", str(path), "a .nc file written by Estimate.save or EstimateN.save "
+                "(this one holds another dataset: a sweep's loads with load_sweep or SweepResultN.load)")  # fmt: skip
         meta = json.loads(ds.attrs["amb_fast"])
         arrays = {n: np.asarray(ds[n].values) for n in _REAL}
         for n in ("H", "force", "displacement"):

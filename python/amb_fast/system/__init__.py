@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import sys
 
-from .._dispatch import register
+from .._dispatch import register, register_recordings
 from .._mechanics import Mechanics
 from ._campbell import Campbell, campbell
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
 from ._experiment import EstimateN, TraceN, hadamard_signs, run_experiment, simulate
+from ._identify import identify
 from ._model import (
     LoopModel,
     StabilityMarginN,
@@ -40,6 +41,7 @@ __all__ = [
     "UnbalanceResponse",
     "campbell",
     "hadamard_signs",
+    "identify",
     "identify_sensitivity",
     "measure_sensitivity",
     "run_experiment",
@@ -70,3 +72,5 @@ __all__ = [
 
 # af.predict(rotor_rig, ...) and its siblings run the N-axis functions of this namespace.
 register(RotorRig, sys.modules[__name__])
+# af.identify(force, displacement, rig=...) of a rotor's four experiments, (4, samples, 4), runs identify.
+register_recordings(4, identify)

@@ -26,6 +26,8 @@ from .._linear import settle_periods_for
 from .._mechanics import Mechanics
 from .._ross import to_ross
 from .._validate import integer, require, seed_value
+from ..plots import plot_coefficients_n
+from . import _results
 from ._control import ControllerSpec, controller_matrix
 from ._model import LoopModel, System, known_dynamics, loop_model, require_stable
 
@@ -161,6 +163,11 @@ class EstimateN(ArrayRecord):
                           UserWarning, stacklevel=2)  # fmt: skip
         return [to_ross(self.bearing(name), int(n), smoothed=smoothed, tag=f"amb_{name}", **kwargs)
                 for name, n in zip(("A", "B"), nodes)]  # fmt: skip
+
+    save = _results.save_estimate  # .nc, .npz or .csv, checksummed; amb_fast.load_estimate reads it back
+    to_xarray = _results.estimate_to_xarray
+    to_dataframe = _results.estimate_to_dataframe
+    plot = plot_coefficients_n
 
 
 @dataclass(frozen=True, eq=False)

@@ -23,6 +23,7 @@ from .._excitation import Multisine
 from .._params import PID, Rig
 from .._sweep import _grid, _progress_bar, point_seeds
 from .._validate import integer, require, seed_value
+from . import _results
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
 from ._experiment import EstimateN, run_experiment
 from ._rotor import RigidRotor, RotorRig
@@ -66,6 +67,12 @@ class SweepResultN(ArrayRecord):
     stable: np.ndarray
     seeds: np.ndarray
     axes: tuple[str, ...]
+
+    save = _results.save_sweep  # .nc or .npz, checksummed; SweepResultN.load reads it back
+    load = staticmethod(_results.load_sweep)
+    status = property(_results.sweep_status)
+    to_xarray = _results.sweep_to_xarray
+    to_dataframe = _results.sweep_to_dataframe
 
 
 def point_model(rig: RotorRig, controller: ControllerSpec, values: dict[str, float]) -> tuple[RotorRig, Any]:

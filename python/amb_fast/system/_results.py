@@ -1,0 +1,263 @@
+"""Results of N axes out and in: :class:`EstimateN` and :class:`SweepResultN` as xarray and pandas views and
+as checksummed files written atomically.
+
+An estimate's every array is (lines, N, N): the matrices over ``(freq, out, in)`` (``H[:, i, j] = dF_i /
+dY_j``), the period-averaged amplitudes over ``(freq, channel, experiment)``. Files: ``.nc`` (NetCDF written
+with h5netcdf alone: fletcher32 per variable, a SHA-256 of the variables and one of the bytes), ``.npz``
+(zip's CRC-32 per array) and, for an estimate, ``.csv`` (one row per line and matrix entry, a SHA-256 in
+its first line); :func:`amb_fast.load_estimate` reads an estimate back (it sees which kind a file holds),
+:meth:`SweepResultN.load` a sweep. Floats are written exactly (``%.17g`` in CSV), so loaded equals saved.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .._sweep_result import unit_of
+from .._validate import require
+from ..io._atomic import atomic_path, atomic_text
+from ..io._netcdf import read_netcdf, write_dataset_netcdf, write_netcdf
+from ..io._results import UNITS, _pandas, digest, read_npz, version
+
+if TYPE_CHECKING:
+    from ._experiment import EstimateN
+    from ._sweep import SweepResultN
+
+KIND = "EstimateN"  # the ``amb_fast_kind`` attribute (NetCDF) or the CSV's second line: an estimate of N axes
+CSV_HEAD = "# amb_fast estimate of N axes"
+MATRICES = ("H", "receptance", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std")
+AMPLITUDES = ("force", "displacement")  # (lines, channel, experiment)
+SUFFIXES = (".nc", ".npz", ".csv")
+_ROTOR_UNITS = {"speed": "rad/s", "transverse_inertia": "kg m^2", "polar_inertia": "kg m^2", "mass": "kg"}
+
+
+def _column(name: str, part: str = "") -> str:
+    """A CSV or DataFrame column: the field, the part of a complex one, its unit (``k_N_per_m``, ``H_real_N_per_m``)."""
+    unit = UNITS[name].replace(" s", "s").replace("/", "_per_")
+    return "_".join(p for p in (name, part, unit) if p)
+
+
+def _complex(real: np.ndarray, imag: np.ndarray) -> np.ndarray:
+    """``real + j imag`` bit for bit (``real + 1j * imag`` turns -0.0 into 0.0 and an infinite part into NaN)."""
+    out = np.empty(np.shape(real), dtype=complex)
+    out.real, out.imag = real, imag
+    return out
+
+
+def _fields(est: EstimateN) -> dict[str, np.ndarray]:
+    return {name: getattr(est, name) for name in (*MATRICES, *AMPLITUDES)}
+
+
+# -- views ----------------------------------------------------------------------------------------------------------
+
+
+def estimate_parts(est: EstimateN) -> tuple[dict[str, tuple], dict[str, tuple], dict[str, Any]]:
+    """The estimate's dataset as ``name: (dims, values, attrs)`` (data and coordinates) and its attributes:
+    the one description of it, for :func:`estimate_to_xarray` and the NetCDF file."""
+    data = {name: (("freq", "out", "in"), getattr(est, name), {"units": UNITS[name]}) for name in MATRICES}
+    data |= {name: (("freq", "channel", "experiment"), getattr(est, name), {"units": UNITS[name]})
+             for name in AMPLITUDES}  # fmt: skip
+    names = np.array(est.axes)
+    coords = {"freq": (("freq",), est.freq, {"units": "Hz"}), "out": (("out",), names, {}),
+              "in": (("in",), names, {}), "channel": (("channel",), names, {}),
+              "experiment": (("experiment",), np.arange(len(names)), {})}  # fmt: skip
+    return data, coords, {"amb_fast_kind": KIND, "periods": est.periods, "axes": json.dumps(list(est.axes))}
+
+
+def _xarray():  # noqa: ANN202
+    try:
+        import xarray as xr
+    except ImportError as error:
+        raise ImportError("to_xarray needs xarray: pip install 'amb_fast[xarray]'") from error
+    return xr
+
+
+def estimate_to_xarray(est: EstimateN):  # noqa: ANN201 - xarray is optional
+    """An ``xarray.Dataset``: the matrices over ``(freq, out, in)``, ``force`` and ``displacement`` over
+    ``(freq, channel, experiment)``, the axes' names as coordinates, units in every variable's ``attrs``."""
+    data, coords, attrs = estimate_parts(est)
+    return _xarray().Dataset(data, coords=coords, attrs=attrs)
+
+
+def _long(matrices: dict[str, np.ndarray], freq: np.ndarray, names: Any) -> dict[str, np.ndarray]:
+    """Long-form columns of (..., lines, N, N) matrices: freq_Hz, i, j (``names[i]``, ``names[j]``), then each
+    matrix's values (complex ones as ``_real``, ``_imag``), one row per leading index, line and entry."""
+    shape = next(iter(matrices.values())).shape
+    lead, N = int(np.prod(shape[:-3])), shape[-1]
+    index = np.arange(N)
+    columns = {"freq_Hz": np.tile(np.repeat(freq, N * N), lead), "i": np.tile(np.repeat(index, N), lead * freq.size),
+               "j": np.tile(index, lead * freq.size * N)}  # fmt: skip
+    columns["i"], columns["j"] = np.asarray(names)[columns["i"]], np.asarray(names)[columns["j"]]
+    for name, values in matrices.items():
+        if np.iscomplexobj(values):
+            columns[_column(name, "real")], columns[_column(name, "imag")] = values.real.ravel(), values.imag.ravel()
+        else:
+            columns[_column(name)] = values.ravel()
+    return columns
+
+
+def estimate_to_dataframe(est: EstimateN):  # noqa: ANN201 - pandas is optional
+    """One row per line and matrix entry: ``freq_Hz``, ``i`` (the force's axis), ``j`` (the displacement's),
+    then ``H`` and ``receptance`` (real and imaginary parts), ``k``, ``c``, smoothed and standard errors,
+    units in the column names."""
+    return _pandas().DataFrame(_long({n: getattr(est, n) for n in MATRICES}, est.freq, est.axes))
+
+
+# -- an estimate's files --------------------------------------------------------------------------------------------
+
+
+def save_estimate(est: EstimateN, path: str | Path) -> Path:
+    """Write atomically (the old file stays whole if the write fails) to ``.nc`` (NetCDF through h5netcdf:
+    fletcher32 per variable, SHA-256s of the variables and of the bytes), ``.npz`` (zip's CRC-32 per array) or
+    ``.csv`` (one row per line and entry ``i, j`` (0-based), every value to 17 digits, ``force`` and
+    ``displacement`` as ``[channel i, experiment j]``; a SHA-256 in its first line). Returns the path;
+    :func:`amb_fast.load_estimate` reads any of them back equal to this estimate, and refuses a damaged one
+    naming the file."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    require(suffix in SUFFIXES, "path", str(path), "a file name ending in .nc, .npz or .csv")
+    if suffix == ".nc":
+        write_dataset_netcdf(path, *estimate_parts(est))
+    elif suffix == ".npz":
+        _write_npz(
+            path, {"kind": KIND, "periods": est.periods, "axes": list(est.axes)}, {"freq": est.freq, **_fields(est)}
+        )
+    else:
+        columns = _long(_fields(est), est.freq, np.arange(len(est.axes)))
+        meta = json.dumps({"periods": est.periods, "axes": list(est.axes)})
+        lines = [f"{CSV_HEAD}, version {version()}", f"# meta: {meta}", ",".join(columns)]
+        lines += [",".join(f"{v:.17g}" for v in row) for row in np.column_stack(list(columns.values()))]
+        body = "\n".join(lines) + "\n"
+        atomic_text(path, f"# sha256: {digest([body.encode()])}\n" + body)
+    return path
+
+
+def _write_npz(path: Path, header: dict[str, Any], arrays: dict[str, Any]) -> None:
+    """Arrays and a JSON ``header`` (with the amb_fast version) in a compressed ``.npz``, written atomically."""
+    with atomic_path(path) as target, open(target, "wb") as handle:
+        np.savez_compressed(handle, header=json.dumps(header | {"version": version()}), **arrays)
+
+
+def _build(freq: np.ndarray, arrays: dict[str, np.ndarray], periods: int, axes: list[str]) -> EstimateN:
+    from ._experiment import EstimateN
+
+    return EstimateN(freq=freq, **arrays, periods=int(periods), axes=tuple(str(a) for a in axes))
+
+
+def estimate_from_dataset(ds: Any) -> EstimateN:  # noqa: ANN401 - an xarray Dataset
+    """The estimate of a Dataset read by :func:`amb_fast.io.read_netcdf` from its ``.nc`` file."""
+    arrays = {name: np.asarray(ds[name].values) for name in MATRICES + AMPLITUDES if name in ds}
+    for name in MATRICES + AMPLITUDES:
+        if name not in arrays:
+            arrays[name] = _complex(np.asarray(ds[f"{name}_real"].values), np.asarray(ds[f"{name}_imag"].values))
+    return _build(np.asarray(ds.freq.values), arrays, ds.attrs["periods"], json.loads(ds.attrs["axes"]))
+
+
+def estimate_from_csv(text: str, name: str) -> EstimateN:
+    """The estimate of a ``.csv`` file's checked text (after its ``# sha256:`` line); ``name``: the file's."""
+    meta = json.loads(next(line for line in text.splitlines() if line.startswith("# meta: "))[8:])
+    rows = [line for line in text.splitlines() if line and not line.startswith("#")]
+    header = rows[0].split(",")
+    N = len(meta["axes"])
+    table = np.array([[float(v) for v in line.split(",")] for line in rows[1:]]).reshape(-1, len(header))
+    require(table.shape[0] % (N * N) == 0, f"{name} rows", table.shape[0], f"a multiple of {N * N} (N x N per line)")
+    col = {c: table[:, k].reshape(-1, N, N) for k, c in enumerate(header)}
+    arrays = {n: col[_column(n)] if _column(n) in col else _complex(col[_column(n, "real")], col[_column(n, "imag")])
+              for n in MATRICES + AMPLITUDES}  # fmt: skip
+    return _build(col["freq_Hz"][:, 0, 0], arrays, meta["periods"], meta["axes"])
+
+
+def load_estimate(path: Path) -> EstimateN:
+    """Read an ``.npz`` estimate of N axes (a member failing its CRC-32 is refused, naming the file)."""
+    f = read_npz(path)
+    header = json.loads(str(f["header"]))
+    require(header.get("kind") == KIND, "path", str(path), f"an .npz file written by {KIND}.save")
+    return _build(f["freq"], {name: f[name] for name in MATRICES + AMPLITUDES}, header["periods"], header["axes"])
+
+
+# -- sweeps ---------------------------------------------------------------------------------------------------------
+
+_SWEEP = ("k", "c", "k_std", "c_std", "receptance")
+
+
+def _param_unit(path: str) -> str:
+    field = path.rpartition(".")[2]
+    return _ROTOR_UNITS.get(field, "") if path == "speed" or path.startswith("rotor.") else unit_of(field)
+
+
+def sweep_status(result: SweepResultN) -> np.ndarray:
+    """Per point: ``"ok"``, or ``"unstable"`` (not run)."""
+    return np.where(result.stable, "ok", "unstable")
+
+
+def sweep_to_xarray(result: SweepResultN):  # noqa: ANN201 - xarray is optional
+    """An ``xarray.Dataset`` over ``(point, freq, out, in)``; the swept paths are coordinates along ``point``
+    (with their units), and ``status``, ``stable``, ``seeds`` per point."""
+    names = np.array(result.axes)
+    data: dict[str, tuple] = {name: (("point", "freq", "out", "in"), getattr(result, name),
+                   {"units": UNITS[name]}) for name in _SWEEP}  # fmt: skip
+    data |= {"stable": (("point",), result.stable, {}), "seeds": (("point",), result.seeds, {}),
+             "status": (("point",), sweep_status(result), {})}  # fmt: skip
+    coords = {name: (("point",), values, {"units": _param_unit(name)}) for name, values in result.params.items()}
+    coords |= {"freq": (("freq",), result.freq, {"units": "Hz"}), "out": (("out",), names, {}),
+               "in": (("in",), names, {})}  # fmt: skip
+    attrs = {"amb_fast_kind": "SweepResultN", "params": json.dumps(list(result.params)),
+             "axes": json.dumps(list(result.axes))}  # fmt: skip
+    return _xarray().Dataset(data, coords=coords, attrs=attrs)
+
+
+def sweep_to_dataframe(result: SweepResultN):  # noqa: ANN201 - pandas is optional
+    """One row per point, line and matrix entry: the swept paths, ``status``, then as
+    :meth:`EstimateN.to_dataframe`."""
+    rows = result.freq.size * len(result.axes) ** 2
+    head = {name: np.repeat(values, rows) for name, values in result.params.items()}
+    head["status"] = np.repeat(sweep_status(result), rows)
+    return _pandas().DataFrame(head | _long({n: getattr(result, n) for n in _SWEEP}, result.freq, result.axes))
+
+
+def save_sweep(result: SweepResultN, path: str | Path) -> Path:
+    """Write atomically to ``.nc`` (xarray's writer: fletcher32, SHA-256s) or ``.npz`` (CRC-32 per array)."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    require(suffix in (".nc", ".npz"), "path", str(path), "a file name ending in .nc or .npz")
+    if suffix == ".nc":
+        ds = sweep_to_xarray(result)
+        ds["receptance_real"], ds["receptance_imag"] = ds.receptance.real, ds.receptance.imag
+        for part in ("receptance_real", "receptance_imag"):
+            ds[part].attrs = dict(ds.receptance.attrs)
+        write_netcdf(ds.drop_vars("receptance"), path)
+    else:
+        arrays = {f"param_{i}": values for i, values in enumerate(result.params.values())}
+        arrays |= {name: getattr(result, name) for name in ("freq", "stable", "seeds", *_SWEEP)}
+        _write_npz(path, {"kind": "SweepResultN", "params": list(result.params), "axes": list(result.axes)}, arrays)
+    return path
+
+
+def load_sweep(path: str | Path) -> SweepResultN:
+    """Read a sweep of N axes written by :meth:`SweepResultN.save`; a damaged file is refused, naming it."""
+    from ._sweep import SweepResultN
+
+    path = Path(path)
+    require(path.is_file(), "path", str(path), "an existing file")
+    suffix = path.suffix.lower()
+    require(suffix in (".nc", ".npz"), "path", str(path), "a file name ending in .nc or .npz")
+    if suffix == ".npz":
+        f = read_npz(path)
+        header = json.loads(str(f["header"]))
+        require(header.get("kind") == "SweepResultN", "path", str(path), "an .npz file written by SweepResultN.save")
+        params = {name: f[f"param_{i}"] for i, name in enumerate(header["params"])}
+        arrays = {name: f[name] for name in ("freq", "stable", "seeds", *_SWEEP)}
+    else:
+        ds = read_netcdf(path)
+        require(ds.attrs.get("amb_fast_kind") == "SweepResultN", "path", str(path),
+                "a .nc file written by SweepResultN.save")  # fmt: skip
+        header = {"axes": json.loads(ds.attrs["axes"])}
+        params = {name: np.asarray(ds[name].values) for name in json.loads(ds.attrs["params"])}
+        arrays = {name: np.asarray(ds[name].values) for name in ("freq", "stable", "seeds", *_SWEEP[:-1])}
+        arrays["receptance"] = _complex(np.asarray(ds.receptance_real.values), np.asarray(ds.receptance_imag.values))
+    arrays["stable"], arrays["seeds"] = arrays["stable"].astype(bool), arrays["seeds"].astype(np.uint64)
+    return SweepResultN(params=params, axes=tuple(str(a) for a in header["axes"]), **arrays)
