@@ -519,5 +519,9 @@ def bearing_process(params: RotorParams, freq_hz: ArrayLike) -> np.ndarray:
     for z, kxy, kyx, cxy, cyx in params.process:
         bx, by = row(z, "x"), row(z, "y")
         for wk, o in zip(w, out):
-            o += Bm_inv.T @ ((kxy + 1j * wk * cxy) * np.outer(bx, by) + (kyx + 1j * wk * cyx) * np.outer(by, bx)) @ Bm_inv
+            o += (
+                Bm_inv.T
+                @ ((kxy + 1j * wk * cxy) * np.outer(bx, by) + (kyx + 1j * wk * cyx) * np.outer(by, bx))
+                @ Bm_inv
+            )
     return out

@@ -8,6 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from scipy import stats
 from scipy.signal import cont2discrete
 
 import amb_fast as af
@@ -126,8 +127,9 @@ def test_probe_noise_acts() -> None:
     assert not np.array_equal(one.H, two.H)
     H = ref.amb_exciter(params, axes, ref.diagonal(PID), one.freq)[0]
     K, C = ref.actual_coefficients(params, one.freq, H)
-    covered = [np.mean(np.abs(est.k - K) < 1.96 * est.k_std) for est in (one, two)]
-    covered += [np.mean(np.abs(est.c - C) < 1.96 * est.c_std) for est in (one, two)]
+    t95 = stats.t.ppf(0.975, one.periods - 1)  # Student's t: ten periods
+    covered = [np.mean(np.abs(est.k - K) < t95 * est.k_std) for est in (one, two)]
+    covered += [np.mean(np.abs(est.c - C) < t95 * est.c_std) for est in (one, two)]
     assert 0.9 <= min(covered) and max(covered) <= 0.98, covered
 
 

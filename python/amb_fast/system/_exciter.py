@@ -75,9 +75,10 @@ def amb_args(model: LoopModel, system: System) -> dict[str, np.ndarray]:
     Gu = discrete_plant(system, model.fs)[1][:, N:]
     Bf = np.vstack([Gu, np.zeros((model.M.shape[0] - Gu.shape[0], N))])
     silent = np.zeros((model.M.shape[0], N))
-    noise = np.array([a.sensor_noise for a in system.axes])
-    return dict(M=model.M, Bf=Bf, Bn=np.hstack([model.Bn, silent]), C=model.C, Dn=np.hstack([model.Dn, silent[: 2 * N]]),
-                transducer_pole=np.zeros(N), sensor_noise=np.r_[noise, np.zeros(N)], force_noise=np.zeros(N))  # fmt: skip
+    noise = np.r_[[a.sensor_noise for a in system.axes], np.zeros(N)]
+    return dict(M=model.M, Bf=Bf, Bn=np.hstack([model.Bn, silent]), C=model.C,
+                Dn=np.hstack([model.Dn, silent[: 2 * N]]), transducer_pole=np.zeros(N), sensor_noise=noise,
+                force_noise=np.zeros(N))  # fmt: skip
 
 
 def _chain(system: System) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
