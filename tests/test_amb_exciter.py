@@ -102,6 +102,8 @@ def test_one_axis_equals_the_held_current_on_the_mass() -> None:
     lagged = af.Rig(amp_bandwidth=3000.0, sensor_bandwidth=10_000.0, dead_time=0.35e-3)
     est = system.run_experiment(lagged, af.PID.paper(), sphs, exciter="amb", periods=2)
     assert np.abs(est.process).max() < 1e-9 * np.abs(est.H).max()
+    paper = system.run_experiment(af.Rig.paper(), af.PID.paper(), sphs, exciter="amb", seed=1)  # noise, eddy lag
+    assert paper.process.shape == paper.k.shape == (sphs.freq.size, 1, 1) and np.all(np.isfinite(paper.process))
 
 
 def test_two_axes_with_rotated_probes() -> None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import warnings
 from dataclasses import dataclass, replace
 from functools import cached_property
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 import scipy.linalg
@@ -138,6 +138,7 @@ class EstimateN(ArrayRecord):
     periods: int
     axes: tuple[str, ...]
     process: np.ndarray | None = None
+    _units: ClassVar[dict[str, str]] = {"process": "N/m"}
 
     def bearing(self, name: str) -> BearingEstimate:
         """The 2x2 view of one bearing (``"A"`` or ``"B"`` of a rotor): its ``x`` and ``y`` axes' rows and
