@@ -461,3 +461,67 @@ def whirl_direction(
     if whirling is not None:
         moving &= whirling
     return shapes, np.where(moving, np.sign(spin * np.sign(angle)), 0).astype(int)
+
+
+def amb_exciter(
+    params: RotorParams, axes: Sequence[af.Rig], controller: Sequence[Sequence[Any]], freq_hz: ArrayLike
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The bearings as exciters, exact and noise-free: a current ``w`` added to each axis' command after the
+    controller (before its dead time), no shaker; the force estimated as ``F = -kyy d - kiy i`` from the
+    bearing-plane displacements ``d`` (the probes by the rigid-body map) and the coil currents ``i`` at the
+    sample instants (the amplifier's state, or with no amplifier lag the command after the dead time's whole
+    samples); ``H = F Y^-1``.
+
+    Built from this module's own sampled plant (the sample integrated in pieces, as :func:`closed_loop`) and
+    the controller's entries: ``u = K e + w``, so ``u = (I - K Pe)^-1 w``. Returns (H (lines, 4, 4) N/m,
+    the bearing-plane displacements per injected current (lines, 4, 4) m/A, the currents per injected
+    current (lines, 4, 4)).
+    """
+    fs, spec = _entries(controller)
+    T = 1.0 / fs
+    A, B, names = continuous_plant(params, axes)
+    n_p = len(names)
+    whole, fraction = _dead_times(axes, T)
+    Phi, G1, G0 = np.eye(n_p), np.zeros((n_p, 4)), np.zeros((n_p, 4))  # x' = Phi x + G1 a[k] + G0 a[k-1]
+    for t0, Ph, Ga in _pieces(A, B, T, fraction):
+        Phi, G1, G0 = Ph @ Phi, Ph @ G1, Ph @ G0
+        for a in range(4):
+            (G1 if t0 >= fraction[a] else G0)[:, a] += Ga[:, 4 + a]
+    probe = _probe_rows(params, names)
+    R = rigid_body_map(params)
+    kyy = np.array([a.kyy for a in axes])
+    kiy = np.array([a.kiy for a in axes])
+    z = np.exp(2j * np.pi * np.atleast_1d(np.asarray(freq_hz, dtype=float)) / fs)
+    H, Yw, Iw = (np.empty((z.size, 4, 4), dtype=complex) for _ in range(3))
+    for k, zk in enumerate(z):
+        applied = np.diag(zk ** -np.array(whole, dtype=float))  # a = z^-whole u
+        X = np.linalg.solve(zk * np.eye(n_p) - Phi, (G1 + G0 / zk) @ applied)  # plant state per command
+        Pe = probe @ X
+        Pi = np.array([X[names.index(f"{name}.i")] if f"{name}.i" in names else applied[j]
+                       for j, name in enumerate(AXES)])  # fmt: skip
+        K = np.zeros((4, 4), dtype=complex)
+        for i, j, ctrl in spec:
+            Ac, Bc, Cc, Dc = _ss(ctrl)
+            entry = Dc + (Cc @ np.linalg.solve(zk * np.eye(Ac.shape[0]) - Ac, Bc) if Ac.size else 0.0)
+            K[i, j] += entry * zk**-ctrl.delay
+        U = np.linalg.inv(np.eye(4) - K @ Pe)
+        Yw[k], Iw[k] = R @ Pe @ U, Pi @ U
+        H[k] = (-kyy[:, None] * Yw[k] - kiy[:, None] * Iw[k]) @ np.linalg.inv(Yw[k])
+    return H, Yw, Iw
+
+
+def bearing_process(params: RotorParams, freq_hz: ArrayLike) -> np.ndarray:
+    """The process's ``K + j w C`` (lines, 4, 4) N/m at the bearing planes (A.x, A.y, B.x, B.y): its
+    stiffness and damping over q, ``Bm^-T (K + j w C) Bm^-1``."""
+    Bm_inv = np.linalg.inv(_planes(params, "bearings"))
+    w = 2 * np.pi * np.atleast_1d(np.asarray(freq_hz, dtype=float))
+    out = np.zeros((w.size, 4, 4), dtype=complex)
+    for z, kxy, kyx, cxy, cyx in params.process:
+        bx, by = row(z, "x"), row(z, "y")
+        for wk, o in zip(w, out):
+            o += (
+                Bm_inv.T
+                @ ((kxy + 1j * wk * cxy) * np.outer(bx, by) + (kyx + 1j * wk * cyx) * np.outer(by, bx))
+                @ Bm_inv
+            )
+    return out

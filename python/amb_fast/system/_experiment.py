@@ -10,9 +10,9 @@ structure's own known dynamics, ``K + j w C = H + w^2 Mb - j w W Gb`` (paper eq.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 import scipy.linalg
@@ -29,6 +29,7 @@ from .._validate import integer, require, seed_value
 from ..plots import plot_coefficients_n
 from . import _results
 from ._control import ControllerSpec, controller_matrix
+from ._exciter import amb_args, amb_lines, corrected_process
 from ._model import LoopModel, System, known_dynamics, loop_model, require_stable
 
 
@@ -119,6 +120,10 @@ class EstimateN(ArrayRecord):
         Periods averaged per experiment.
     axes : tuple of str
         The axes' names (``A.x, A.y, B.x, B.y`` for a rotor).
+    process : ndarray or None
+        With ``exciter="amb"``: the process ``K + j w C`` (complex, N/m) at the bearing planes in the
+        estimate's frame, corrected for the hold, the amplifier's and the probes' lags, the dead time and
+        the mass loading (not for the eddy-current lag); None from shakers.
     """
 
     freq: np.ndarray
@@ -134,6 +139,8 @@ class EstimateN(ArrayRecord):
     displacement: np.ndarray
     periods: int
     axes: tuple[str, ...]
+    process: np.ndarray | None = None
+    _units: ClassVar[dict[str, str]] = {"process": "N/m"}
 
     def bearing(self, name: str) -> BearingEstimate:
         """The 2x2 view of one bearing (``"A"`` or ``"B"`` of a rotor): its ``x`` and ``y`` axes' rows and
@@ -256,6 +263,7 @@ def run_experiment(
     seed: int | None = None,
     median_window: int = 5,
     start: Literal["steady", "rest"] = "steady",
+    exciter: Literal["shaker", "amb"] = "shaker",
 ) -> EstimateN:
     """The SPHS identification of N axes: N experiments with Hadamard signs on the shakers, then ``H = F Y^-1``.
 
@@ -263,12 +271,20 @@ def run_experiment(
     the line spectra drawn directly, exact in distribution) or from rest after ``settle_periods``
     (default: enough for the slowest pole to decay below 1e-9). ``seed`` fixes the noise of all
     experiments. Raises :class:`UnstableLoopError` for an unstable loop (naming the speed for a rotor).
+
+    ``exciter="amb"``: the bearings excite instead (:mod:`._exciter`): the excitation's samples, read as
+    current in A, are added to each axis' current command after the controller (Hadamard signs); the force
+    is estimated from the coil current and the probes, ``F = -kyy d - kiy i``, so ``H``, ``k``, ``c`` hold
+    the structure's own dynamic stiffness at the bearings as the sampled signals give it, and
+    ``EstimateN.process`` its process with the hold and the known lags removed. The current is the
+    amplifier's output: the eddy-current lag (``Rig.eddy_bandwidth``) is left out of both.
     """
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
     periods = integer("periods", periods, 2)
     window = integer("median_window", median_window, 1)
     require(window % 2 == 1, "median_window", median_window, "odd")
     require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
+    require(exciter in ("shaker", "amb"), "exciter", exciter, "'shaker' (the shakers' forces) or 'amb' (the bearings)")
     mech = system.mechanics()
     N = mech.axes
     spec = controller_matrix(controller, N)
@@ -283,7 +299,7 @@ def run_experiment(
     forces = signs[:, None, :] * excitation.samples[None, :, None]  # (experiment, sample, axis)
     seeds = experiment_seeds(seed, N)
     harmonics = excitation.harmonics
-    args = core_args(model, system, outputs=N)
+    args = amb_args(model, system) if exciter == "amb" else core_args(model, system, outputs=N)
     # Drawn from the steady state, all N experiments in one call (the per-line solves once); from rest the
     # core runs up to two in lock step.
     step = N if start == "steady" else 2
@@ -292,4 +308,8 @@ def run_experiment(
                                          steady_start=start == "steady", bins=harmonics)
              for first in range(0, N, step)]  # fmt: skip
     Fp, Yp = (np.concatenate([part[i] for part in parts], axis=-1) for i in (0, 1))
-    return estimate(Fp, Yp, harmonics * excitation.f0, mech, excitation.period_samples, window)
+    if exciter == "shaker":
+        return estimate(Fp, Yp, harmonics * excitation.f0, mech, excitation.period_samples, window)
+    est = estimate(*amb_lines(system, spec.fs, Fp, Yp), harmonics * excitation.f0, mech, excitation.period_samples,
+                   window)  # fmt: skip
+    return replace(est, process=corrected_process(system, spec.fs, est.freq, est.H))
