@@ -122,8 +122,8 @@ class EstimateN(ArrayRecord):
         The axes' names (``A.x, A.y, B.x, B.y`` for a rotor).
     process : ndarray or None
         With ``exciter="amb"``: the process ``K + j w C`` (complex, N/m) at the bearing planes in the
-        estimate's frame, corrected for the hold, the amplifier's and the probes' lags, the dead time and
-        the mass loading (not for the eddy-current lag); None from shakers.
+        estimate's frame, corrected for the hold, the amplifier's, eddy-current and probes' lags, the dead
+        time and the mass loading, as the model knows them; None from shakers.
     """
 
     freq: np.ndarray
@@ -277,7 +277,8 @@ def run_experiment(
     is estimated from the coil current and the probes, ``F = -kyy d - kiy i``, so ``H``, ``k``, ``c`` hold
     the structure's own dynamic stiffness at the bearings as the sampled signals give it, and
     ``EstimateN.process`` its process with the hold and the known lags removed. The current is the
-    amplifier's output: the eddy-current lag (``Rig.eddy_bandwidth``) is left out of both.
+    amplifier's output: ``H``, ``k``, ``c`` carry the eddy-current lag (``Rig.eddy_bandwidth``) between it and
+    the force; ``process`` removes it as the model knows it.
     """
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
     periods = integer("periods", periods, 2)
