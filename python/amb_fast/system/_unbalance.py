@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike
 from .._equality import ArrayRecord
 from .._validate import real, require
 from ._control import ControllerSpec, controller_matrix
-from ._model import loop_model, plant, require_stable
+from ._model import LoopModel, loop_model, plant, require_stable
 from ._rotor import RotorRig, plane_map
 
 
@@ -92,6 +92,19 @@ def _unbalance_forces(rig: RotorRig, unbalance: Any) -> list[tuple[np.ndarray, c
     return out
 
 
+def _drive(system: RotorRig, sources: list[tuple[np.ndarray, complex]], T: float) -> np.ndarray:
+    """``G_W f``: what one sample of the rotating force ``Re(f e^{jWt})`` at the rotor's speed ``W`` adds to the
+    plant's state from ``t = 0`` (complex, over the plant's states), integrated exactly."""
+    A, _, lay = plant(system)
+    mech, speed, n = system.mechanics(), system.rotor.speed, A.shape[0]
+    Mt = mech.mass + mech.actuators.T @ np.diag([a.mass_loading for a in system.axes]) @ mech.actuators
+    b = np.zeros(n, dtype=complex)
+    b[list(lay.velocity)] = np.linalg.solve(Mt, sum((me * speed**2) * direction for direction, me in sources))
+    augmented = np.zeros((n + 1, n + 1), dtype=complex)
+    augmented[:n, :n], augmented[:n, n], augmented[n, n] = A * T, b * T, 1j * speed * T
+    return scipy.linalg.expm(augmented)[:n, n]
+
+
 def unbalance_response(
     rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike, unbalance: Any
 ) -> UnbalanceResponse:
@@ -115,25 +128,15 @@ def unbalance_response(
     for i, speed in enumerate(W):
         system = rig.at_speed(float(speed))
         require_stable(system, spec, f"the closed loop at speed {speed:g} rad/s")
-        A, B, lay = plant(system)
+        _, _, lay = plant(system)
         model = loop_model(system, spec)
-        n, size = A.shape[0], model.M.shape[0]
-        mech = system.mechanics()
-        Mt = mech.mass + mech.actuators.T @ np.diag([a.mass_loading for a in system.axes]) @ mech.actuators
-        force = sum((me * speed**2) * direction for direction, me in sources)  # generalized, complex
-        b = np.zeros(n, dtype=complex)
-        b[list(lay.velocity)] = np.linalg.solve(Mt, force)
-        augmented = np.zeros((n + 1, n + 1), dtype=complex)
-        augmented[:n, :n], augmented[:n, n], augmented[n, n] = A * T, b * T, 1j * speed * T
-        G = scipy.linalg.expm(augmented)[:n, n]
-        z = np.exp(1j * speed * T)
-        drive = np.zeros(size, dtype=complex)
-        drive[:n] = G
-        X = np.linalg.solve(z * np.eye(size) - model.M, drive)  # the state at the sample instants k: X z^k
+        drive = np.zeros(model.M.shape[0], dtype=complex)
+        drive[: len(lay.names)] = _drive(system, sources, T)
+        X = np.linalg.solve(np.exp(1j * speed * T) * np.eye(drive.size) - model.M, drive)  # the state: X z^k
         states.append(X)
         probes[i] = model.C[:4] @ X
         currents[i] = model.C[4:] @ X
-        d = mech.actuators @ X[list(lay.position)]
+        d = system.mechanics().actuators @ X[list(lay.position)]
         i_f = np.array([X[lay.eddy[j]] if lay.eddy[j] >= 0 else X[lay.coil[j]] if lay.coil[j] >= 0 else currents[i, j]
                         for j in range(4)])  # fmt: skip
         forces[i] = -np.array([a.kyy for a in system.axes]) * d - np.array([a.kiy for a in system.axes]) * i_f
@@ -145,3 +148,35 @@ def unbalance_response(
             if a[k] > a[k - 1] and a[k] >= a[k + 1]:
                 peaks.append((name, float(W[k]), float(a[k])))
     return UnbalanceResponse(W, probes, forces, currents, peaks, states)
+
+
+def with_unbalance(
+    system: Any, model: LoopModel, args: dict[str, np.ndarray], force: np.ndarray, unbalance: Any
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """The core's loop and forces for :func:`simulate` with rotating unbalances at the rotor's constant speed.
+
+    The loop gains a harmonic oscillator at the speed ``W``, states ``(cos W t, sin W t)`` at the samples,
+    whose output is the unbalance force ``Re(f e^{jWt})``, continuous in time (``x[k+1] += G_W f e^{jWkT}``,
+    :func:`_drive`, as real columns). The core starts from rest: a unit kick on one extra force channel at
+    sample 0 (not recorded, no noise) sets the state at sample 1 to the loop's step from rest with the
+    oscillator at ``t = 0``."""
+    require(isinstance(system, RotorRig), "rig", type(system).__name__, "a RotorRig (an unbalance needs a rotor)")
+    speed = system.rotor.speed
+    require(speed != 0.0, "the rotor's speed", speed,
+            "non-zero with an unbalance (at standstill it exerts no force): give rig.at_speed(W), W in rad/s")  # fmt: skip
+    T = 1.0 / model.fs
+    G = _drive(system, _unbalance_forces(system, unbalance), T)
+    s, n, N = model.M.shape[0], G.size, model.Bf.shape[1]
+    M = np.zeros((s + 2, s + 2))
+    M[:s, :s] = model.M
+    M[:n, s], M[:n, s + 1] = G.real, -G.imag  # Re(G e^{jWt}) = Re G cos - Im G sin
+    c, si = np.cos(speed * T), np.sin(speed * T)
+    M[s:, s:] = [[c, -si], [si, c]]
+    Bf = np.zeros((s + 2, N + 1))
+    Bf[:s, :N], Bf[:, N] = model.Bf, M[:, s]  # the kick: M applied to the oscillator at (1, 0)
+    kick = np.zeros((force.shape[0], 1))
+    kick[:1] = 1.0
+    return dict(args, M=M, Bf=Bf, Bn=np.vstack([args["Bn"], np.zeros((2, args["Bn"].shape[1]))]),
+                C=np.hstack([args["C"], np.zeros((args["C"].shape[0], 2))]),
+                transducer_pole=np.append(args["transducer_pole"], 0.0),
+                force_noise=np.append(args["force_noise"], 0.0)), np.hstack([force, kick])  # fmt: skip
