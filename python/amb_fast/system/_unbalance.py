@@ -163,7 +163,7 @@ def with_unbalance(
     require(isinstance(system, RotorRig), "rig", type(system).__name__, "a RotorRig (an unbalance needs a rotor)")
     speed = system.rotor.speed
     require(speed != 0.0, "the rotor's speed", speed,
-            "non-zero with an unbalance (at standstill it exerts no force): give rig.at_speed(W), W in rad/s")  # fmt: skip
+            "non-zero with an unbalance (at standstill it exerts no force): rig.at_speed(W), rad/s")  # fmt: skip
     T = 1.0 / model.fs
     G = _drive(system, _unbalance_forces(system, unbalance), T)
     s, n, N = model.M.shape[0], G.size, model.Bf.shape[1]
