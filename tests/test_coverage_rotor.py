@@ -44,6 +44,7 @@ def test_intervals_of_k_c_and_the_sensitivity_cover_the_exact_values() -> None:
         hits["c"].append(np.abs(est.c - c) <= T95 * est.c_std)
         measured = af.measure_sensitivity(rig, pid, test_signal, periods=PERIODS, seed=seed)
         hits["|Gs|"].append(np.abs(np.abs(measured.S) - exact_S) <= T95 * measured.S_std)
+        np.testing.assert_allclose(measured.sigma_max, np.linalg.svd(measured.S, compute_uv=False)[:, 0], rtol=1e-12)
         # The noise is what the intervals are about: the errors are not rounding.
         assert np.median(est.k_std) > 1e-6 * np.median(np.abs(k)) and np.median(measured.S_std) > 1e-4
     rates = {name: coverage(h) for name, h in hits.items()}
