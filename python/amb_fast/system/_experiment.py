@@ -94,7 +94,7 @@ def simulate(
     require(array.ndim == 2 and array.shape[1] == N, "force shape", array.shape, f"(samples, {N}): columns {names}")
     args = core_args(model, system)
     if unbalance is not None:
-        args, array = with_unbalance(system, model, args, array, unbalance)
+        args, array = with_unbalance(system, controller, args, array, unbalance)
     recorded, out = _core.mimo_simulate(**args, force=array, seed=seed_value(seed))
     return TraceN(force=recorded[:, :N], displacement=out[:, :N], current=out[:, N:], fs=model.fs, axes=names)
 

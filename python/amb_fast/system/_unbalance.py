@@ -23,7 +23,7 @@ from .._linear import checked_poles, eigenvalues
 from .._validate import real, require
 from ._campbell import loop_stack
 from ._control import ControllerSpec, controller_matrix
-from ._model import LoopModel, loop_model, plant
+from ._model import loop_model, plant, require_stable
 from ._rotor import RotorRig, plane_map
 
 
@@ -163,7 +163,7 @@ def unbalance_response(
 
 
 def with_unbalance(
-    system: Any, model: LoopModel, args: dict[str, np.ndarray], force: np.ndarray, unbalance: Any
+    system: Any, controller: ControllerSpec, args: dict[str, np.ndarray], force: np.ndarray, unbalance: Any
 ) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """The core's loop and forces for :func:`simulate` with rotating unbalances at the rotor's constant speed.
 
@@ -171,11 +171,14 @@ def with_unbalance(
     whose output is the unbalance force ``Re(f e^{jWt})``, continuous in time (``x[k+1] += G_W f e^{jWkT}``,
     :func:`_drives`, as real columns). The core starts from rest: a unit kick on one extra force channel at
     sample 0 (not recorded, no noise) sets the state at sample 1 to the loop's step from rest with the
-    oscillator at ``t = 0``."""
+    oscillator at ``t = 0``. An unstable loop is refused (:class:`UnstableLoopError`, naming the speed):
+    the unbalance would only show as the core's overflow."""
     require(isinstance(system, RotorRig), "rig", type(system).__name__, "a RotorRig (an unbalance needs a rotor)")
     speed = system.rotor.speed
     require(speed != 0.0, "the rotor's speed", speed,
             "non-zero with an unbalance (at standstill it exerts no force): rig.at_speed(W), rad/s")  # fmt: skip
+    require_stable(system, controller, f"the closed loop at speed {speed:g} rad/s")
+    model = loop_model(system, controller)
     T = 1.0 / model.fs
     G = _drives(system, _unbalance_forces(system, unbalance), np.array([speed]), T)[0]
     s, n, N = model.M.shape[0], G.size, model.Bf.shape[1]
