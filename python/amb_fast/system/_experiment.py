@@ -31,6 +31,7 @@ from . import _results
 from ._control import ControllerSpec, controller_matrix
 from ._exciter import amb_args, amb_lines, corrected_process
 from ._model import LoopModel, System, known_dynamics, loop_model, require_stable
+from ._unbalance import with_unbalance
 
 
 def hadamard_signs(n: int) -> np.ndarray:
@@ -80,16 +81,25 @@ def core_args(model: LoopModel, system: System, outputs: int | None = None) -> d
                 force_noise=np.array([a.force_noise for a in system.axes]))  # fmt: skip
 
 
-def simulate(system: System, controller: ControllerSpec, force: ArrayLike, *, seed: int | None = None) -> TraceN:
+def simulate(
+    system: System, controller: ControllerSpec, force: ArrayLike, *, seed: int | None = None, unbalance: Any = None
+) -> TraceN:
     """Run the closed loop of N axes from rest on forces (n, N) (N, one column per axis' shaker) at the
-    controller's ``fs``: zero-order held, the loop discretised exactly; ``seed`` fixes the noise."""
+    controller's ``fs``: zero-order held, the loop discretised exactly; ``seed`` fixes the noise.
+
+    A rotor may carry ``unbalance=[(m_e, z, phase), ...]`` (kg m, m, rad; as :func:`unbalance_response`)
+    at its constant speed ``W``: the force ``m_e W^2`` rotating from ``phase`` at ``t = 0``, continuous in
+    time (not held), exact at the samples; the recorded forces stay the shakers'."""
     model = loop_model(system, controller)
     N = model.Bf.shape[1]
     array = np.ascontiguousarray(force, dtype=np.float64)
     names = system.mechanics().names
     require(array.ndim == 2 and array.shape[1] == N, "force shape", array.shape, f"(samples, {N}): columns {names}")
-    recorded, out = _core.mimo_simulate(**core_args(model, system), force=array, seed=seed_value(seed))
-    return TraceN(force=recorded, displacement=out[:, :N], current=out[:, N:], fs=model.fs, axes=names)
+    args = core_args(model, system)
+    if unbalance is not None:
+        args, array = with_unbalance(system, controller, args, array, unbalance)
+    recorded, out = _core.mimo_simulate(**args, force=array, seed=seed_value(seed))
+    return TraceN(force=recorded[:, :N], displacement=out[:, :N], current=out[:, N:], fs=model.fs, axes=names)
 
 
 @dataclass(frozen=True, eq=False)

@@ -73,15 +73,22 @@ def sensitivity_from_lines(
     the sum and of the test signal: ``Gs = A E^-1`` per line with its variances (the core's N x N estimate)."""
     S, _, _, _, var_re, var_im = _core.estimate_nxn(np.ascontiguousarray(after_lines),
                                                     np.ascontiguousarray(injection_lines))  # fmt: skip
+    return _measurement(S, var_re, var_im, freq, int(after_lines.shape[0]), axes)
+
+
+def _measurement(
+    S: np.ndarray, var_re: np.ndarray, var_im: np.ndarray, freq: np.ndarray, periods: int, axes: tuple[str, ...]
+) -> SensitivityMeasurement:
+    """``Gs`` per line with the variances of its parts: the standard error of ``|Gs|``, the peaks and zones."""
     magnitude = np.abs(S)
     safe = np.maximum(magnitude, 1e-300)
     S_std = np.sqrt((S.real / safe) ** 2 * var_re + (S.imag / safe) ** 2 * var_im)
     diagonal = np.abs(np.diagonal(S, axis1=1, axis2=2))  # (lines, N)
     best = np.argmax(diagonal, axis=0)
     peak = tuple(float(diagonal[j, i]) for i, j in enumerate(best))
-    sigma = np.linalg.svd(S, compute_uv=False)[:, 0]
+    sigma = np.sqrt(np.linalg.eigvalsh(np.conj(np.swapaxes(S, 1, 2)) @ S)[:, -1])  # sigma_max: faster than svd
     return SensitivityMeasurement(freq, S, S_std, peak, tuple(float(freq[j]) for j in best),
-                                  tuple(iso_zone(p) for p in peak), sigma, int(after_lines.shape[0]), axes)  # fmt: skip
+                                  tuple(iso_zone(p) for p in peak), sigma, periods, axes)  # fmt: skip
 
 
 def measure_sensitivity(
@@ -112,7 +119,14 @@ def measure_sensitivity(
         sensor_noise=np.array([a.sensor_noise for a in rig.axes]), force_noise=np.zeros(N),
         period_forces=forces, settle_periods=0, periods=periods, seeds=experiment_seeds(seed, N), steady_start=True,
         bins=excitation.harmonics)  # fmt: skip
-    return sensitivity_from_lines(Yp + Fp, Fp, excitation.harmonics * excitation.f0, mech.names)
+    # Each experiment injects at its own axis, the same every period: per period Gs = (Y + E) / e with e the
+    # test signal's line (no inverse), and its scatter is the core's linearised one (dE = 0) to rounding.
+    e = np.diagonal(Fp[0], axis1=1, axis2=2)[:, None, :]  # (lines, 1, experiment)
+    G = Yp / e
+    S = G.mean(axis=0)
+    G -= S
+    var_re, var_im = (np.sum(part**2, axis=0) / (periods * (periods - 1)) for part in (G.real, G.imag))
+    return _measurement(S + np.eye(N), var_re, var_im, excitation.harmonics * excitation.f0, periods, mech.names)
 
 
 def identify_sensitivity(

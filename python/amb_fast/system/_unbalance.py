@@ -17,8 +17,11 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike
 
+from .._blas import one_blas_thread
 from .._equality import ArrayRecord
+from .._linear import checked_poles, eigenvalues
 from .._validate import real, require
+from ._campbell import loop_stack
 from ._control import ControllerSpec, controller_matrix
 from ._model import loop_model, plant, require_stable
 from ._rotor import RotorRig, plane_map
@@ -92,6 +95,28 @@ def _unbalance_forces(rig: RotorRig, unbalance: Any) -> list[tuple[np.ndarray, c
     return out
 
 
+def _drives(rig: RotorRig, sources: list[tuple[np.ndarray, complex]], speeds: np.ndarray, T: float) -> np.ndarray:
+    """``G_W f`` at each speed ``W``: what one sample of the rotating force ``Re(f e^{jWt})`` adds to the plant's
+    state from ``t = 0``, (speeds, plant states) complex, integrated exactly in one batched exponential (the
+    plant is affine in the speed, as in :func:`loop_stack`; the force grows as ``W^2``)."""
+    A0, _, lay = plant(rig.at_speed(0.0))
+    A1 = plant(rig.at_speed(1.0))[0] - A0
+    mech, n = rig.mechanics(), A0.shape[0]
+    Mt = mech.mass + mech.actuators.T @ np.diag([a.mass_loading for a in rig.axes]) @ mech.actuators
+    b = np.zeros(n, dtype=complex)
+    b[list(lay.velocity)] = np.linalg.solve(Mt, sum(me * direction for direction, me in sources))
+    # Real arithmetic (4x cheaper): the force's phasor as a 2-state oscillator (cos W t, sin W t), whose
+    # columns give Re G and -Im G.
+    augmented = np.zeros((speeds.size, n + 2, n + 2))
+    augmented[:, :n, :n] = (A0 + speeds[:, None, None] * A1) * T
+    augmented[:, :n, n] = (speeds**2 * T)[:, None] * b.real
+    augmented[:, :n, n + 1] = -(speeds**2 * T)[:, None] * b.imag
+    augmented[:, n, n + 1], augmented[:, n + 1, n] = -speeds * T, speeds * T
+    E = scipy.linalg.expm(augmented)
+    return E[:, :n, n] - 1j * E[:, :n, n + 1]
+
+
+@one_blas_thread  # hundreds of small exponentials and solves: BLAS threads only spin on them
 def unbalance_response(
     rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike, unbalance: Any
 ) -> UnbalanceResponse:
@@ -99,7 +124,8 @@ def unbalance_response(
     (rad/s): ``unbalance=[(m_e, z, phase), ...]`` (kg m, m from the centre of mass, rad).
 
     A speed at which the loop is unstable is refused (:class:`UnstableLoopError`, naming it): there is no
-    steady response there; :func:`campbell` finds such speeds."""
+    steady response there; :func:`campbell` finds such speeds. All speeds are solved at once (the loops
+    and drives in batched exponentials, the steady states in one batched solve)."""
     require(isinstance(rig, RotorRig), "rig", type(rig).__name__, "a RotorRig")
     W = np.atleast_1d(np.asarray(speeds, dtype=float))
     require(W.ndim == 1 and W.size >= 1 and bool(np.all(np.isfinite(W))), "speeds", speeds,
@@ -110,38 +136,62 @@ def unbalance_response(
         bool(np.all(np.abs(W) < np.pi * fs)), "speeds", speeds, f"below the Nyquist rate pi fs = {np.pi * fs:g} rad/s"
     )
     sources = _unbalance_forces(rig, unbalance)
-    probes, forces, currents = (np.zeros((W.size, 4), dtype=complex) for _ in range(3))
-    states = []
-    for i, speed in enumerate(W):
-        system = rig.at_speed(float(speed))
-        require_stable(system, spec, f"the closed loop at speed {speed:g} rad/s")
-        A, B, lay = plant(system)
-        model = loop_model(system, spec)
-        n, size = A.shape[0], model.M.shape[0]
-        mech = system.mechanics()
-        Mt = mech.mass + mech.actuators.T @ np.diag([a.mass_loading for a in system.axes]) @ mech.actuators
-        force = sum((me * speed**2) * direction for direction, me in sources)  # generalized, complex
-        b = np.zeros(n, dtype=complex)
-        b[list(lay.velocity)] = np.linalg.solve(Mt, force)
-        augmented = np.zeros((n + 1, n + 1), dtype=complex)
-        augmented[:n, :n], augmented[:n, n], augmented[n, n] = A * T, b * T, 1j * speed * T
-        G = scipy.linalg.expm(augmented)[:n, n]
-        z = np.exp(1j * speed * T)
-        drive = np.zeros(size, dtype=complex)
-        drive[:n] = G
-        X = np.linalg.solve(z * np.eye(size) - model.M, drive)  # the state at the sample instants k: X z^k
-        states.append(X)
-        probes[i] = model.C[:4] @ X
-        currents[i] = model.C[4:] @ X
-        d = mech.actuators @ X[list(lay.position)]
-        i_f = np.array([X[lay.eddy[j]] if lay.eddy[j] >= 0 else X[lay.coil[j]] if lay.coil[j] >= 0 else currents[i, j]
-                        for j in range(4)])  # fmt: skip
-        forces[i] = -np.array([a.kyy for a in system.axes]) * d - np.array([a.kiy for a in system.axes]) * i_f
+    M = loop_stack(rig, spec, W)
+    poles = eigenvalues(M)  # the core's, as every stability check of a run
+    unstable = np.flatnonzero(np.any(np.abs(poles) >= 1.0, axis=1))
+    if unstable.size:
+        first = float(W[unstable[0]])
+        checked_poles(poles[unstable[0]], lambda: f"the closed loop at speed {first:g} rad/s is unstable")
+    _, _, lay = plant(rig)
+    model = loop_model(rig, spec)  # its output rows C do not depend on the speed
+    drive = np.zeros(M.shape[:2], dtype=complex)
+    drive[:, : len(lay.names)] = _drives(rig, sources, W, T)
+    z = np.exp(1j * W * T)[:, None, None]
+    X = np.linalg.solve(z * np.eye(M.shape[1]) - M, drive[..., None])[..., 0]  # the state: X z^k at sample k
+    probes, currents = X @ model.C[:4].T, X @ model.C[4:].T
+    d = X[:, list(lay.position)] @ rig.mechanics().actuators.T
+    i_f = np.stack([X[:, lay.eddy[j]] if lay.eddy[j] >= 0 else X[:, lay.coil[j]] if lay.coil[j] >= 0
+                    else currents[:, j] for j in range(4)], axis=1)  # fmt: skip
+    forces = -np.array([a.kyy for a in rig.axes]) * d - np.array([a.kiy for a in rig.axes]) * i_f
     amplitude = np.abs(probes)
     peaks = []
     for j, name in enumerate(("A.x", "A.y", "B.x", "B.y")):
         a = amplitude[:, j]
-        for k in range(1, W.size - 1):
-            if a[k] > a[k - 1] and a[k] >= a[k + 1]:
-                peaks.append((name, float(W[k]), float(a[k])))
-    return UnbalanceResponse(W, probes, forces, currents, peaks, states)
+        for k in np.flatnonzero((a[1:-1] > a[:-2]) & (a[1:-1] >= a[2:])) + 1:
+            peaks.append((name, float(W[k]), float(a[k])))
+    return UnbalanceResponse(W, probes, forces, currents, peaks, list(X))
+
+
+def with_unbalance(
+    system: Any, controller: ControllerSpec, args: dict[str, np.ndarray], force: np.ndarray, unbalance: Any
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """The core's loop and forces for :func:`simulate` with rotating unbalances at the rotor's constant speed.
+
+    The loop gains a harmonic oscillator at the speed ``W``, states ``(cos W t, sin W t)`` at the samples,
+    whose output is the unbalance force ``Re(f e^{jWt})``, continuous in time (``x[k+1] += G_W f e^{jWkT}``,
+    :func:`_drives`, as real columns). The core starts from rest: a unit kick on one extra force channel at
+    sample 0 (not recorded, no noise) sets the state at sample 1 to the loop's step from rest with the
+    oscillator at ``t = 0``. An unstable loop is refused (:class:`UnstableLoopError`, naming the speed):
+    the unbalance would only show as the core's overflow."""
+    require(isinstance(system, RotorRig), "rig", type(system).__name__, "a RotorRig (an unbalance needs a rotor)")
+    speed = system.rotor.speed
+    require(speed != 0.0, "the rotor's speed", speed,
+            "non-zero with an unbalance (at standstill it exerts no force): rig.at_speed(W), rad/s")  # fmt: skip
+    require_stable(system, controller, f"the closed loop at speed {speed:g} rad/s")
+    model = loop_model(system, controller)
+    T = 1.0 / model.fs
+    G = _drives(system, _unbalance_forces(system, unbalance), np.array([speed]), T)[0]
+    s, n, N = model.M.shape[0], G.size, model.Bf.shape[1]
+    M = np.zeros((s + 2, s + 2))
+    M[:s, :s] = model.M
+    M[:n, s], M[:n, s + 1] = G.real, -G.imag  # Re(G e^{jWt}) = Re G cos - Im G sin
+    c, si = np.cos(speed * T), np.sin(speed * T)
+    M[s:, s:] = [[c, -si], [si, c]]
+    Bf = np.zeros((s + 2, N + 1))
+    Bf[:s, :N], Bf[:, N] = model.Bf, M[:, s]  # the kick: M applied to the oscillator at (1, 0)
+    kick = np.zeros((force.shape[0], 1))
+    kick[:1] = 1.0
+    return dict(args, M=M, Bf=Bf, Bn=np.vstack([args["Bn"], np.zeros((2, args["Bn"].shape[1]))]),
+                C=np.hstack([args["C"], np.zeros((args["C"].shape[0], 2))]),
+                transducer_pole=np.append(args["transducer_pole"], 0.0),
+                force_noise=np.append(args["force_noise"], 0.0)), np.hstack([force, kick])  # fmt: skip
