@@ -105,8 +105,8 @@ class Mechanics(ArrayRecord):
 
     def dynamic_stiffness(self, freq: np.ndarray) -> np.ndarray:
         """The structure's own dynamic stiffness at the bearing planes (no process, no mass loading),
-        ``(A D^-1 A^T)^-1`` with ``D = elastic - w^2 M + j w (elastic_damping + W G)``, shape (len(freq), N, N) (``A^-T D A^-1``
-        for a rigid structure)."""
+        ``(A D^-1 A^T)^-1`` with ``D = elastic - w^2 M + j w (elastic_damping + W G)``, shape
+        (len(freq), N, N) (``A^-T D A^-1`` for a rigid structure)."""
         w = (2 * np.pi * np.asarray(freq, dtype=float))[:, None, None]
         D = -(w**2) * self.mass + 1j * w * self.speed * self.gyroscopic
         if self.elastic is None:

@@ -78,7 +78,7 @@ def import_ross(what: str = "to_ross") -> Any:
     """``import ross``, with the REFPROP banner that a C library among its dependencies (CoolProp, through
     ccp) prints to the process's standard output on first import silenced: it is about fluid properties,
     nothing a bearing export needs, and it would land in the middle of the caller's output."""
-    if "ross" in sys.modules:
+    if sys.modules.get("ross") is not None:
         return sys.modules["ross"]
     sys.stdout.flush()
     try:

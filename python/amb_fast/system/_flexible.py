@@ -97,7 +97,7 @@ class FlexibleRotor(ArrayRecord):
         require(0 <= zeta < 1, "damping_ratio", zeta, "in [0, 1)")
         object.__setattr__(self, "damping_ratio", zeta)
 
-    def __hash__(self) -> int:  # by value, as the loop's models are cached per distinct rig
+    def __hash__(self) -> int:  # type: ignore[override]  # by value, as the loop's models are cached per distinct rig
         arrays = (self.modal_mass, self.modal_stiffness, self.modal_gyroscopic, self.shapes)
         return hash(
             (

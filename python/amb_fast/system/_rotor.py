@@ -120,7 +120,8 @@ class Rotor(Protocol):
     ``A.x, A.y, B.x, B.y``, its ``mass`` (kg) and the map from its coordinates to the displacement at an
     axial position (``plane(z, name)``, (2, n), where unbalances act)."""
 
-    speed: float
+    @property
+    def speed(self) -> float: ...
 
     @property
     def mass(self) -> float: ...
@@ -198,4 +199,4 @@ class RotorRig:
 
     def at_speed(self, speed: float) -> RotorRig:
         """This rig with the rotor spinning at ``speed`` rad/s."""
-        return replace(self, rotor=replace(self.rotor, speed=speed))
+        return replace(self, rotor=replace(self.rotor, speed=speed))  # type: ignore[type-var]
