@@ -174,6 +174,10 @@ class FlexibleRotor(ArrayRecord):
         M0, K0, G0 = (np.asarray(m, dtype=float) for m in (rotor.M0, rotor.K0, rotor.G0))
         cross = max(np.abs(X[np.ix_(plane_x, plane_y)]).max() for X in (M0, K0))
         require(cross == 0.0, "rotor", f"x-y coupling {cross:g}", "isotropic elements (x and y planes uncoupled)")
+        lateral = np.concatenate([plane_x, plane_y])
+        others = np.setdiff1d(np.arange(width * len(nodes)), lateral)  # axial, torsional
+        axial = max(np.abs(X[np.ix_(lateral, others)]).max(initial=0.0) for X in (M0, K0, G0))
+        require(axial == 0.0, "rotor", f"lateral-axial/torsional coupling {axial:g}", "uncoupled lateral dofs")
         z = np.asarray(rotor.nodes_pos, dtype=float)
         M, K = M0[np.ix_(plane_x, plane_x)], K0[np.ix_(plane_x, plane_x)]
         # Rigid body in the x plane: x = 1; x = z - zc, beta = 1 (tilt about the centre of mass zc).
@@ -187,7 +191,6 @@ class FlexibleRotor(ArrayRecord):
         Ry = np.column_stack([translation, np.column_stack([-(z - zc), ones]).ravel()])  # tx: y = -z tx, alpha
         shapes.append(_bending(My, Ky, Ry, modes))
         # The basis over (x, y, alpha, beta) of every node: (x, y, tx, ty, mode1 x, mode1 y, ...).
-        lateral = np.concatenate([plane_x, plane_y])
         T = np.zeros((lateral.size, 4 + 2 * modes))
         half = plane_x.size
         T[:half, 0], T[half:, 1], T[half:, 2], T[:half, 3] = R[:, 0], Ry[:, 0], Ry[:, 1], R[:, 1]
