@@ -138,7 +138,8 @@ class RotorRig:
     Parameters
     ----------
     rotor : RigidRotor or FlexibleRotor
-        Any rotor that gives its mechanics, mass and planes (:class:`Rotor`).
+        Any frozen-dataclass rotor with a ``speed`` field, a ``mass`` (kg), ``mechanics()`` (its four axes
+        ``A.x, A.y, B.x, B.y``) and ``plane(z)`` (where an unbalance acts).
     axes : Rig or sequence of 4 Rig
         Each axis' actuator (kyy, kiy, amplifier and eddy-current lags, dead time), probe (lag, noise) and
         shaker force transducer (AC coupling, noise, mass loading at the bearing plane), in the order
