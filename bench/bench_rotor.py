@@ -22,6 +22,10 @@ augmented matrix, the loop closed) and ``numpy.linalg.eigvals``. Target (issue 2
 Campbell assembles each speed's loop in Python and computes eigenvectors too (for the whirl), so it is
 slower than that peer: the target needs the loop assembled in the core.
 
+Flexible rotor: ``FlexibleRotor.example()`` (ROSS's 30-element shaft, 8 bending modes kept in each plane:
+20 coordinates) on ``Rig.paper()``'s chains under the same PID, the same experiment at standstill, against
+``RotorRig.example()`` at standstill, in interleaved pairs. Target (issue 27): <= 4x. Skipped without ROSS.
+
 The process first does what users do (a 300x300 matrix product, an eigenvalue problem) and rests half a
 second, so OpenBLAS's threads are in the state a user's process leaves them.
 """
@@ -30,6 +34,7 @@ from __future__ import annotations
 
 import contextlib
 import time
+from collections.abc import Callable
 
 import numpy as np
 import scipy.linalg
@@ -57,6 +62,35 @@ def peer_campbell(rig: af.RotorRig, pid: af.PID, speeds: np.ndarray) -> list[np.
     return out
 
 
+def interleaved(first: Callable[[], object], second: Callable[[], object], count: int) -> tuple[float, float, float]:
+    """Median CPU seconds of ``first`` and ``second`` run in turn ``count`` times, and the median of the pairs'
+    ratios ``second / first``."""
+    first(), second()
+    pairs = []
+    for _ in range(count):
+        start = time.process_time()
+        first()
+        t1 = time.process_time() - start
+        start = time.process_time()
+        second()
+        pairs.append((t1, time.process_time() - start))
+    t1, t2 = (float(np.median([p[i] for p in pairs])) for i in (0, 1))
+    return t1, t2, float(np.median([p[1] / p[0] for p in pairs]))
+
+
+def flexible_ratio(sphs: af.Multisine, pid: af.PID, count: int) -> tuple[float, float, float] | None:
+    """The flexible rotor's experiment against the rigid rotor's (both at standstill, noise on, 10 periods),
+    interleaved: (rigid s, flexible s, median ratio), or None without ROSS."""
+    try:
+        flexible = af.RotorRig(af.FlexibleRotor.example(modes=8), af.Rig.paper())
+    except ImportError:
+        return None
+    rigid = af.RotorRig.example()
+    seeds = iter(range(10**6))
+    return interleaved(lambda: af.run_experiment(rigid, pid, sphs, periods=10, seed=next(seeds)),
+                       lambda: af.run_experiment(flexible, pid, sphs, periods=10, seed=next(seeds)), count)  # fmt: skip
+
+
 def main() -> None:
     args = arguments(__doc__, "rotor")
     repeats = 3 if args.quick else 21
@@ -74,17 +108,8 @@ def main() -> None:
     def four() -> object:
         return af.run_experiment(rotor, pid, sphs, periods=10, seed=next(seeds))
 
-    one(), four()
-    pairs = []
-    for _ in range(3 * repeats):
-        start = time.process_time()
-        one()
-        t1 = time.process_time() - start
-        start = time.process_time()
-        four()
-        pairs.append((t1, time.process_time() - start))
-    t1, t4 = (float(np.median([p[i] for p in pairs])) for i in (0, 1))
-    ratio = float(np.median([p[1] / p[0] for p in pairs]))
+    t1, t4, ratio = interleaved(one, four, 3 * repeats)
+    flexible = flexible_ratio(sphs, pid, 3 * repeats)
 
     speeds = np.linspace(0.0, 6000.0, 100 if args.quick else 500)
     fresh = iter(np.arange(1, 10**6) * 1e-6)  # a new grid each repeat: no cached loops
@@ -112,6 +137,10 @@ def main() -> None:
         **iso[1],
         **runup[1],
     }
+    if flexible is not None:
+        measured["rigid rotor experiment at standstill, 4 x 10 periods (cpu)"] = flexible[0]
+        measured["flexible rotor experiment (8 modes), 4 x 10 periods (cpu)"] = flexible[1]
+        ratios["flexible / rigid rotor experiment, interleaved pairs (target <= 4)"] = flexible[2]
     report(args.out, measured, ratios, "ms", 1e3)
 
 

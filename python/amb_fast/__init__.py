@@ -63,6 +63,7 @@ from .io import Recording, load_estimate, load_recording, save_recording
 from .system import (
     Campbell,
     EstimateN,
+    FlexibleRotor,
     RigidRotor,
     RotorRig,
     SensitivityMeasurement,
@@ -124,6 +125,7 @@ __all__ = [
     "CITATION",
     "Campbell",
     "EstimateN",
+    "FlexibleRotor",
     "RigidRotor",
     "RotorRig",
     "SensitivityMeasurement",

@@ -3,7 +3,9 @@
 A structure gives ``M q'' + (C + speed G) q' + K q = A^T f`` (``q``: its coordinates; ``f``: one force
 per controlled axis, acting at that axis' bearing plane in its direction), the map ``A`` from ``q`` to
 the displacement at each axis' bearing plane, the map ``S`` from ``q`` to what each probe reads, and the
-``readout`` that turns the probes' readings into the displacements an estimate reports.
+``readout`` that turns the probes' readings into the displacements an estimate reports. A flexible
+structure (more coordinates than axes) adds its own ``elastic`` stiffness; its rigid-body motions (the null
+space of ``elastic``) say what the probes read of the bearing planes.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg
 
 from ._equality import ArrayRecord
 
@@ -41,6 +44,13 @@ class Mechanics(ArrayRecord):
         The controlled axes' names (``"x"``, ``"A.x"``, ...).
     coordinate_names : tuple of str
         The coordinates' names (``"x"``, ``"tx"``, ...).
+    elastic : ndarray or None
+        (n, n) the structure's own stiffness (a flexible shaft's bending), part of the structure and not a
+        process: the known dynamics an estimate removes include it. Its null space (N-dimensional) is the
+        structure's rigid-body motions. None: a rigid structure with as many coordinates as axes.
+    elastic_damping : ndarray or None
+        (n, n) the structure's own damping (a flexible shaft's material damping), N s/m, part of the
+        structure as ``elastic`` is. None: none.
     """
 
     mass: np.ndarray
@@ -53,6 +63,8 @@ class Mechanics(ArrayRecord):
     speed: float
     names: tuple[str, ...]
     coordinate_names: tuple[str, ...]
+    elastic: np.ndarray | None = None
+    elastic_damping: np.ndarray | None = None
 
     @property
     def coordinates(self) -> int:
@@ -64,14 +76,43 @@ class Mechanics(ArrayRecord):
         """N."""
         return int(self.actuators.shape[0])
 
+    def rigid(self) -> np.ndarray:
+        """(n, N) the rigid-body motions: the null space of ``elastic`` (the identity for a rigid structure)."""
+        if self.elastic is None:
+            return np.eye(self.coordinates)
+        return scipy.linalg.null_space(self.elastic, rcond=1e-12)
+
+    @property
+    def reads(self) -> np.ndarray:
+        """(N, N) what the probes read of the bearing planes' displacements under rigid-body motion
+        (``S R (A R)^-1``, ``R`` the rigid-body motions; ``S A^-1`` for a rigid structure)."""
+        R = self.rigid()
+        return self.probes @ R @ np.linalg.inv(self.actuators @ R)
+
     @property
     def frame(self) -> np.ndarray:
         """(N, N) ``E``: the estimate's displacements are ``E`` times the displacements at the bearing
-        planes (``readout S A^-1``; the identity when the probes sit at the bearings and are read as they
-        are). Needs as many coordinates as axes."""
-        return self.readout @ self.probes @ np.linalg.inv(self.actuators)
+        planes (``readout`` times :attr:`reads`; the identity when the probes sit at the bearings and are read
+        as they are)."""
+        return self.readout @ self.reads
 
     def at_bearings(self, matrix: np.ndarray) -> np.ndarray:
-        """A matrix over ``q`` (mass, gyroscopic, a process) in bearing-plane coordinates, ``A^-T X A^-1``."""
-        inverse = np.linalg.inv(self.actuators)
+        """A matrix over ``q`` (mass, gyroscopic, a process) in bearing-plane coordinates, ``A^-T X A^-1``
+        (a flexible structure: its rigid-body part, ``(A R)^-T R^T X R (A R)^-1``)."""
+        R = self.rigid()
+        inverse = R @ np.linalg.inv(self.actuators @ R)
         return inverse.T @ matrix @ inverse
+
+    def dynamic_stiffness(self, freq: np.ndarray) -> np.ndarray:
+        """The structure's own dynamic stiffness at the bearing planes (no process, no mass loading),
+        ``(A D^-1 A^T)^-1`` with ``D = elastic - w^2 M + j w (elastic_damping + W G)``, shape
+        (len(freq), N, N) (``A^-T D A^-1`` for a rigid structure)."""
+        w = (2 * np.pi * np.asarray(freq, dtype=float))[:, None, None]
+        D = -(w**2) * self.mass + 1j * w * self.speed * self.gyroscopic
+        if self.elastic is None:
+            inverse = np.linalg.inv(self.actuators)
+            return inverse.T @ D @ inverse
+        if self.elastic_damping is not None:
+            D = D + 1j * w * self.elastic_damping
+        receptance = self.actuators @ np.linalg.solve(D + self.elastic, self.actuators.T)
+        return np.linalg.inv(receptance)

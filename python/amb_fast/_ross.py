@@ -53,7 +53,7 @@ def to_ross(estimate: Any, n: int, *, smoothed: bool = False, **kwargs: Any) -> 
     exactly (linearly between lines; ROSS's own smoothing spline would not pass through them) and holds
     the edge values outside the band: run the rotor within the identified band.
     """
-    ross = _import_ross()
+    ross = import_ross()
     require(isinstance(n, (int, np.integer)) and n >= 0, "n", n, "a rotor node number >= 0")
     arrays = coefficient_arrays(estimate, smoothed=smoothed)
     omega = arrays["frequency"]
@@ -74,11 +74,11 @@ def _exact(omega: np.ndarray, values: np.ndarray):  # noqa: ANN202
     return interp1d(omega, values, kind="linear", bounds_error=False, fill_value=(values[0], values[-1]))
 
 
-def _import_ross() -> Any:
+def import_ross(what: str = "to_ross") -> Any:
     """``import ross``, with the REFPROP banner that a C library among its dependencies (CoolProp, through
     ccp) prints to the process's standard output on first import silenced: it is about fluid properties,
     nothing a bearing export needs, and it would land in the middle of the caller's output."""
-    if "ross" in sys.modules:
+    if sys.modules.get("ross") is not None:
         return sys.modules["ross"]
     sys.stdout.flush()
     try:
@@ -90,7 +90,7 @@ def _import_ross() -> Any:
             os.dup2(null, 1)
         import ross
     except ImportError as error:  # pragma: no cover - only without the extra
-        raise ImportError("to_ross needs ROSS: pip install 'amb_fast[ross]' (ross-rotordynamics)") from error
+        raise ImportError(f"{what} needs ROSS: pip install 'amb_fast[ross]' (ross-rotordynamics)") from error
     finally:
         if saved >= 0:
             os.dup2(saved, 1)

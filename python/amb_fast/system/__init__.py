@@ -1,9 +1,10 @@
 """One model of N controlled axes: a structure that moves, each axis' chain, a controller matrix.
 
 A structure (:class:`Mechanics`: the platform, the planar mass of :class:`~amb_fast.TwoAxisRig`, the
-:class:`RigidRotor`) with one :class:`~amb_fast.Rig` chain per axis (actuator, probe, transducer) is
-assembled into one linear sampled-data loop (:mod:`._model`); predictions, poles, sensitivity and
-effective coefficients are N x N; the rotor's experiments and its Campbell diagram run on it.
+:class:`RigidRotor`, the :class:`FlexibleRotor` from ROSS) with one :class:`~amb_fast.Rig` chain per axis
+(actuator, probe, transducer) is assembled into one linear sampled-data loop (:mod:`._model`); predictions,
+poles, sensitivity and effective coefficients are N x N; the rotor's experiments and its Campbell diagram
+run on it.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from .._mechanics import Mechanics
 from ._campbell import Campbell, campbell
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
 from ._experiment import EstimateN, TraceN, hadamard_signs, run_experiment, simulate
+from ._flexible import FlexibleRotor
 from ._identify import identify
 from ._model import (
     LoopModel,
@@ -37,6 +39,7 @@ from ._unbalance import UnbalanceResponse, unbalance_response
 __all__ = [
     "Campbell",
     "EstimateN",
+    "FlexibleRotor",
     "TraceN",
     "UnbalanceResponse",
     "campbell",

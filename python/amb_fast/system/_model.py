@@ -96,7 +96,11 @@ def plant(system: System) -> tuple[np.ndarray, np.ndarray, Layout]:
     act = mech.actuators
     mass = mech.mass + act.T @ np.diag([a.mass_loading for a in axes]) @ act
     stiffness = mech.stiffness + act.T @ np.diag([a.kyy for a in axes]) @ act
+    if mech.elastic is not None:
+        stiffness = stiffness + mech.elastic
     damping = mech.damping + mech.speed * mech.gyroscopic
+    if mech.elastic_damping is not None:
+        damping = damping + mech.elastic_damping
     inverse = np.linalg.inv(mass)
     pos, vel = list(lay.position), list(lay.velocity)
     A[pos, vel] = 1.0
@@ -368,7 +372,7 @@ def effective_coefficients(
     G = np.zeros((f.size, N, N), dtype=complex)
     for i, j, c in spec:
         G[:, i, j] = controller_response(c, f, discrete=discrete)
-    reads = mech.probes @ np.linalg.inv(mech.actuators)
+    reads = mech.reads
     kyy = np.array([a.kyy for a in system.axes])
     kiy = np.array([a.kiy for a in system.axes])[:, None]
     w = 2 * np.pi * f[:, None, None]
@@ -381,7 +385,6 @@ def effective_coefficients(
 
 def known_dynamics(mechanics: Mechanics, freq: np.ndarray) -> np.ndarray:
     """``-w^2 Mb + j w W Gb`` in the estimate's frame (the structure's own dynamic stiffness at the bearing
-    planes: what ``k``, ``c`` remove from ``H``; no mass loading: paper eq. 9), shape (len(freq), N, N)."""
-    w = (2 * np.pi * np.asarray(freq, dtype=float))[:, None, None]
-    Mb, Gb = mechanics.at_bearings(mechanics.mass), mechanics.at_bearings(mechanics.gyroscopic)
-    return (-(w**2) * Mb + 1j * w * mechanics.speed * Gb) @ np.linalg.inv(mechanics.frame)
+    planes, a flexible one's with its bending: what ``k``, ``c`` remove from ``H``; no mass loading: paper
+    eq. 9), shape (len(freq), N, N)."""
+    return mechanics.dynamic_stiffness(freq) @ np.linalg.inv(mechanics.frame)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -83,6 +83,15 @@ class RigidRotor:
         """The rotor's matrices over ``(x, y, tx, ty)`` and its four axes' geometry (A.x, A.y, B.x, B.y)."""
         return _rotor_mechanics(self)
 
+    def plane(self, z: float, name: str = "z") -> np.ndarray:
+        """(2, 4): the coordinates to the displacement ``(x, y)`` at axial position ``z`` (m from the centre of
+        mass), within twice the outermost bearing or probe."""
+        z = real(name, z, "m")
+        span = 2 * max(abs(p) for p in self.bearings + self.sensors)
+        require(abs(z) <= span, name, z, f"within the rotor's model, |z| <= {span:g} m (twice its outermost "
+                "bearing or probe)")  # fmt: skip
+        return plane_map(z)
+
 
 @functools.lru_cache(maxsize=64)
 def _rotor_mechanics(rotor: RigidRotor) -> Mechanics:
@@ -104,13 +113,33 @@ def _rotor_mechanics(rotor: RigidRotor) -> Mechanics:
     return Mechanics(*matrices, float(rotor.speed), AXES, ("x", "y", "tx", "ty"))
 
 
+@runtime_checkable
+class Rotor(Protocol):
+    """What :class:`RotorRig` takes as its rotor (:class:`RigidRotor`, :class:`FlexibleRotor`): a frozen
+    dataclass with a ``speed`` field (rad/s), hashable, giving its :class:`Mechanics` with the four axes
+    ``A.x, A.y, B.x, B.y``, its ``mass`` (kg) and the map from its coordinates to the displacement at an
+    axial position (``plane(z, name)``, (2, n), where unbalances act)."""
+
+    @property
+    def speed(self) -> float: ...
+
+    @property
+    def mass(self) -> float: ...
+
+    def mechanics(self) -> Mechanics: ...
+
+    def plane(self, z: float, name: str = "z") -> np.ndarray: ...
+
+
 @dataclass(frozen=True)
 class RotorRig:
-    """A rigid rotor on two radial magnetic bearings, each axis with the one-axis rig's chain.
+    """A rotor on two radial magnetic bearings, each axis with the one-axis rig's chain.
 
     Parameters
     ----------
-    rotor : RigidRotor
+    rotor : RigidRotor or FlexibleRotor
+        Any frozen-dataclass rotor with a ``speed`` field, a ``mass`` (kg), ``mechanics()`` (its four axes
+        ``A.x, A.y, B.x, B.y``) and ``plane(z)`` (where an unbalance acts).
     axes : Rig or sequence of 4 Rig
         Each axis' actuator (kyy, kiy, amplifier and eddy-current lags, dead time), probe (lag, noise) and
         shaker force transducer (AC coupling, noise, mass loading at the bearing plane), in the order
@@ -118,11 +147,16 @@ class RotorRig:
         mass. Only the linear force law, without clearance or current limit.
     """
 
-    rotor: RigidRotor
+    rotor: Rotor
     axes: Any = field(default_factory=Rig)
 
     def __post_init__(self) -> None:
-        require(isinstance(self.rotor, RigidRotor), "rotor", type(self.rotor).__name__, "an amb_fast.RigidRotor")
+        require(
+            isinstance(self.rotor, Rotor),
+            "rotor",
+            type(self.rotor).__name__,
+            "a rotor (amb_fast.RigidRotor, amb_fast.FlexibleRotor)",
+        )
         axes = (self.axes,) * 4 if isinstance(self.axes, Rig) else self.axes
         ok = isinstance(axes, Sequence) and len(axes) == 4
         require(ok, "axes", self.axes, "a Rig, or 4 of them (A.x, A.y, B.x, B.y)")
@@ -166,4 +200,4 @@ class RotorRig:
 
     def at_speed(self, speed: float) -> RotorRig:
         """This rig with the rotor spinning at ``speed`` rad/s."""
-        return replace(self, rotor=replace(self.rotor, speed=speed))
+        return replace(self, rotor=replace(self.rotor, speed=speed))  # type: ignore[type-var]

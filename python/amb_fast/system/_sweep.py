@@ -26,7 +26,7 @@ from .._validate import integer, require, seed_value
 from . import _results
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
 from ._experiment import EstimateN, run_experiment
-from ._rotor import RigidRotor, RotorRig
+from ._rotor import RotorRig
 
 _AXIS_FIELDS = tuple(f.name for f in fields(Rig) if f.name not in ("force_law", "substeps", "mass"))
 _ROTOR_FIELDS = ("mass", "transverse_inertia", "polar_inertia", "speed")
@@ -80,11 +80,12 @@ def point_model(rig: RotorRig, controller: ControllerSpec, values: dict[str, flo
     names = rig.mechanics().names
     spec = controller_matrix(controller, len(names))
     rotor_changes: dict[str, Any] = {}
+    swept = tuple(f for f in _ROTOR_FIELDS if f in {f.name for f in fields(rig.rotor)})  # type: ignore[arg-type]
     axis_changes: list[dict[str, Any]] = [{} for _ in names]
     gains: dict[str, float] = {}
     for path, value in values.items():
         head, _, field = path.rpartition(".")
-        if path == "speed" or (head == "rotor" and field in _ROTOR_FIELDS):
+        if path == "speed" or (head == "rotor" and field in swept):
             rotor_changes["speed" if path == "speed" else field] = value
         elif not head and path in _AXIS_FIELDS:
             for changes in axis_changes:
@@ -94,7 +95,7 @@ def point_model(rig: RotorRig, controller: ControllerSpec, values: dict[str, flo
         elif not head and path in _GAINS:
             gains[path] = value
         else:
-            require(False, "sweep axis", path, f"speed, rotor.<{'|'.join(_ROTOR_FIELDS)}>, a Rig field (every axis) "
+            require(False, "sweep axis", path, f"speed, rotor.<{'|'.join(swept)}>, a Rig field (every axis) "
                     f"or <axis>.<Rig field> with an axis of {names}, or a PID gain ({', '.join(_GAINS)})")  # fmt: skip
     entries = [list(row) for row in spec.entries]
     if gains:
@@ -104,7 +105,7 @@ def point_model(rig: RotorRig, controller: ControllerSpec, values: dict[str, flo
         for i in range(len(names)):
             entries[i][i] = replace(entries[i][i], **gains)
     axes = tuple(replace(a, **changes) if changes else a for a, changes in zip(rig.axes, axis_changes))
-    rotor: RigidRotor = replace(rig.rotor, **rotor_changes) if rotor_changes else rig.rotor
+    rotor = replace(rig.rotor, **rotor_changes) if rotor_changes else rig.rotor  # type: ignore[type-var]
     return RotorRig(rotor, axes), ControllerMatrix(tuple(tuple(row) for row in entries), spec.fs)
 
 

@@ -24,7 +24,7 @@ from .._validate import real, require
 from ._campbell import loop_stack
 from ._control import ControllerSpec, controller_matrix
 from ._model import loop_model, plant, require_stable
-from ._rotor import RotorRig, plane_map
+from ._rotor import RotorRig
 
 
 @dataclass(frozen=True, eq=False)
@@ -76,21 +76,17 @@ class UnbalanceResponse(ArrayRecord):
 
 
 def _unbalance_forces(rig: RotorRig, unbalance: Any) -> list[tuple[np.ndarray, complex]]:
-    """Per unbalance: the (4,) generalized-force direction of a unit rotating force at its plane, complex,
+    """Per unbalance: the (n,) generalized-force direction of a unit rotating force at its plane, complex,
     and ``m_e e^{j phase}``."""
     require(isinstance(unbalance, (list, tuple)) and len(unbalance) > 0, "unbalance", unbalance,
             "a list of (m_e kg m, z m, phase rad)")  # fmt: skip
-    zA, zB = rig.rotor.bearings
-    zs, za = min(rig.rotor.sensors + rig.rotor.bearings), max(rig.rotor.sensors + rig.rotor.bearings)
     out = []
     for j, entry in enumerate(unbalance):
         ok = isinstance(entry, (list, tuple)) and len(entry) == 3
         require(ok, f"unbalance[{j}]", entry, "(m_e kg m, z m, phase rad)")
-        me, z, phase = (real(f"unbalance[{j}][{k}]", v, u) for k, (v, u) in enumerate(zip(entry, ("kg m", "m", "rad"))))
-        span = 2 * max(abs(zs), abs(za), abs(zA), abs(zB))
-        require(abs(z) <= span, f"unbalance[{j}] plane", z,
-                f"within the rotor's model, |z| <= {span:g} m (twice its outermost bearing or probe)")  # fmt: skip
-        direction = plane_map(z).T @ np.array([1.0, -1j])  # F = Re([1, -j] e^{jWt}): (cos, sin)
+        me, _, phase = (real(f"unbalance[{j}][{k}]", v, u) for k, (v, u) in enumerate(zip(entry, ("kg m", "m", "rad"))))
+        plane = rig.rotor.plane(entry[1], f"unbalance[{j}] plane")
+        direction = plane.T @ np.array([1.0, -1j])  # F = Re([1, -j] e^{jWt}): (cos, sin)
         out.append((direction, me * np.exp(1j * phase)))
     return out
 
@@ -121,7 +117,8 @@ def unbalance_response(
     rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike, unbalance: Any
 ) -> UnbalanceResponse:
     """The exact synchronous response of the sampled loop to rotating unbalances at each of ``speeds``
-    (rad/s): ``unbalance=[(m_e, z, phase), ...]`` (kg m, m from the centre of mass, rad).
+    (rad/s): ``unbalance=[(m_e, z, phase), ...]`` (kg m, m from the centre of mass, rad; on a
+    :class:`FlexibleRotor` ``z`` is a node's axial position, :attr:`FlexibleRotor.positions`).
 
     A speed at which the loop is unstable is refused (:class:`UnstableLoopError`, naming it): there is no
     steady response there; :func:`campbell` finds such speeds. All speeds are solved at once (the loops
