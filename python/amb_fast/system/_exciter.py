@@ -132,8 +132,9 @@ def corrected_process(system: System, fs: float, freq: np.ndarray, H: np.ndarray
     # Ty = readout Lp S A^-1 Wb^-1 D (Wb = Zb + kyy, D = -kiy La held): Wb - Wb0 = -D Ty^-1 dT Ty0^-1 RL.
     lags = _lag(w, [a.amp_bandwidth for a in system.axes]) * _lag(w, [a.eddy_bandwidth for a in system.axes])
     D = -kiy * lags * held
-    RL = mech.readout @ (_lag(w, [a.sensor_bandwidth for a in system.axes])[:, :, None] * mech.probes)
-    RL = RL @ np.linalg.inv(mech.actuators)
+    # What the probes read of the bearing planes (a flexible rotor: under its rigid-body motion only, so
+    # there the correction is approximate).
+    RL = mech.readout @ (_lag(w, [a.sensor_bandwidth for a in system.axes])[:, :, None] * mech.reads)
     P = -D[:, :, None] * np.linalg.solve(Ty0 + dT, dT) @ np.linalg.solve(Ty0, RL)
     return P @ inverse_frame
 
