@@ -383,5 +383,8 @@ def known_dynamics(mechanics: Mechanics, freq: np.ndarray) -> np.ndarray:
     """``-w^2 Mb + j w W Gb`` in the estimate's frame (the structure's own dynamic stiffness at the bearing
     planes: what ``k``, ``c`` remove from ``H``; no mass loading: paper eq. 9), shape (len(freq), N, N)."""
     w = (2 * np.pi * np.asarray(freq, dtype=float))[:, None, None]
-    Mb, Gb = mechanics.at_bearings(mechanics.mass), mechanics.at_bearings(mechanics.gyroscopic)
-    return (-(w**2) * Mb + 1j * w * mechanics.speed * Gb) @ np.linalg.inv(mechanics.frame)
+    dynamics = -(w**2) * mechanics.at_bearings(mechanics.mass)
+    if mechanics.speed:  # at rest real: H minus it is the same to the bit, made in half the time
+        dynamics = dynamics + 1j * w * mechanics.speed * mechanics.at_bearings(mechanics.gyroscopic)
+    frame = mechanics.frame
+    return dynamics if np.array_equal(frame, np.eye(len(frame))) else dynamics @ np.linalg.inv(frame)  # I: no product
