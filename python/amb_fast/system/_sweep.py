@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _core
-from .._blas import blas_parked
+from .._blas import parked_blas
 from .._equality import ArrayRecord
 from .._errors import UnstableLoopError
 from .._excitation import Multisine
@@ -140,6 +140,7 @@ def point_model(rig: System, controller: ControllerSpec, values: dict[str, float
     return rig, ControllerMatrix(tuple(tuple(row) for row in entries), spec.fs)
 
 
+@parked_blas  # points on threads: BLAS on one thread, no idle OpenBLAS worker spinning
 def sweep(
     rig: System,
     controller: ControllerSpec,
@@ -200,36 +201,35 @@ def sweep(
             return None
 
     bar = _progress_bar(progress, count)
-    with blas_parked():  # points on threads: BLAS on one thread, no idle OpenBLAS worker spinning
-        try:
-            if executor is None and N == 2:  # the core's two-axis sweep: 4 x 80 bytes of estimates a line
-                size = points_per_call(count, threads, 320 * excitation.freq.size, bar is not None)
-                for first in range(0, count, size):
-                    rows = np.arange(first, min(first + size, count))
-                    ran = _core_sweep([model(i) for i in rows], excitation, settle_periods, seeds[rows], start,
-                                      periods, threads)  # fmt: skip
-                    for i, (values, ok) in zip(rows, ran):
-                        stable[i] = ok
-                        if ok:
-                            k[i], c[i], k_std[i], c_std[i], receptance[i] = values
+    try:
+        if executor is None and N == 2:  # the core's two-axis sweep: 4 x 80 bytes of estimates a line
+            size = points_per_call(count, threads, 320 * excitation.freq.size, bar is not None)
+            for first in range(0, count, size):
+                rows = np.arange(first, min(first + size, count))
+                ran = _core_sweep([model(i) for i in rows], excitation, settle_periods, seeds[rows], start,
+                                  periods, threads)  # fmt: skip
+                for i, (values, ok) in zip(rows, ran):
+                    stable[i] = ok
+                    if ok:
+                        k[i], c[i], k_std[i], c_std[i], receptance[i] = values
+                if bar is not None:
+                    bar.update(rows.size)
+        else:
+            pool = ThreadPoolExecutor(threads) if executor is None else executor
+            try:
+                for i, est in enumerate(pool.map(point, range(count))):
+                    if est is not None:
+                        stable[i] = True
+                        k[i], c[i], k_std[i], c_std[i] = est.k, est.c, est.k_std, est.c_std
+                        receptance[i] = est.receptance
                     if bar is not None:
-                        bar.update(rows.size)
-            else:
-                pool = ThreadPoolExecutor(threads) if executor is None else executor
-                try:
-                    for i, est in enumerate(pool.map(point, range(count))):
-                        if est is not None:
-                            stable[i] = True
-                            k[i], c[i], k_std[i], c_std[i] = est.k, est.c, est.k_std, est.c_std
-                            receptance[i] = est.receptance
-                        if bar is not None:
-                            bar.update(1)
-                finally:
-                    if executor is None:
-                        pool.shutdown()
-        finally:
-            if bar is not None:
-                bar.close()
+                        bar.update(1)
+            finally:
+                if executor is None:
+                    pool.shutdown()
+    finally:
+        if bar is not None:
+            bar.close()
     return SweepResultN(points, excitation.freq, k, c, k_std, c_std, receptance, stable, seeds, names)
 
 

@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import system
+from .._blas import parked_blas
 from .._excitation import Multisine, period_samples
 from .._experiment import _lines
 from .._validate import integer, real, require
@@ -46,6 +47,7 @@ def run_experiment(rig: TwoAxisRig, controller: ControllerSpec, excitation: Mult
     return system.run_experiment(_rig(rig), controller, excitation, **options)
 
 
+@parked_blas  # as every sweep (system.sweep parks them too; nested, nothing more happens)
 def sweep(rig: TwoAxisRig, controller: ControllerSpec, excitation: Multisine, **options: Any) -> SweepResultN:
     """:func:`run_experiment` over a grid of two-axis points (:func:`amb_fast.system.sweep`), e.g.
     ``sweep(rig, pid, sphs, kxy=np.linspace(0, 2e4, 5), kp=[2000, 2400, 2800])``; names: rig fields
