@@ -11,6 +11,7 @@ off-diagonal one.
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 from concurrent.futures import Executor, ThreadPoolExecutor
 from dataclasses import dataclass, fields, is_dataclass, replace
 from numbers import Real
@@ -200,18 +201,19 @@ def sweep(
         except UnstableLoopError:
             return None
 
+    def keep(i: int, values: tuple[np.ndarray, ...]) -> None:
+        stable[i] = True
+        k[i], c[i], k_std[i], c_std[i], receptance[i] = values
+
     bar = _progress_bar(progress, count)
     try:
         if executor is None and N == 2:  # the core's two-axis sweep: 4 x 80 bytes of estimates a line
             size = points_per_call(count, threads, 320 * excitation.freq.size, bar is not None)
             for first in range(0, count, size):
                 rows = np.arange(first, min(first + size, count))
-                ran = _core_sweep([model(i) for i in rows], excitation, settle_periods, seeds[rows], start,
-                                  periods, threads)  # fmt: skip
-                for i, (values, ok) in zip(rows, ran):
-                    stable[i] = ok
-                    if ok:
-                        k[i], c[i], k_std[i], c_std[i], receptance[i] = values
+                models = [model(i) for i in rows]
+                for j, values in _core_sweep(models, excitation, settle_periods, seeds[rows], start, periods, threads):
+                    keep(rows[j], values)
                 if bar is not None:
                     bar.update(rows.size)
         else:
@@ -219,9 +221,7 @@ def sweep(
             try:
                 for i, est in enumerate(pool.map(point, range(count))):
                     if est is not None:
-                        stable[i] = True
-                        k[i], c[i], k_std[i], c_std[i] = est.k, est.c, est.k_std, est.c_std
-                        receptance[i] = est.receptance
+                        keep(i, (est.k, est.c, est.k_std, est.c_std, est.receptance))
                     if bar is not None:
                         bar.update(1)
             finally:
@@ -236,12 +236,11 @@ def sweep(
 def _core_sweep(
     models: list[tuple[Any, ControllerMatrix]], excitation: Multisine, settle_periods: int | None, seeds: np.ndarray,
     start: str, periods: int, workers: int,
-) -> list[tuple[tuple[np.ndarray, ...], bool]]:  # fmt: skip
-    """Two-axis points in one call of the core on ``workers`` threads: per point its (k, c, k_std, c_std,
-    receptance) as :func:`run_experiment` makes them, bit for bit, and whether its loop is stable (an
-    unstable one is not run). The loops are built here, each once (a call's points outnumber
-    loop_model's cache); their poles come from the core in a stack per loop size, the numbers with which
-    run_experiment checks a loop."""
+) -> Iterator[tuple[int, tuple[np.ndarray, ...]]]:  # fmt: skip
+    """Two-axis points in one call of the core on ``workers`` threads: each stable point's index and its
+    (k, c, k_std, c_std, receptance) as :func:`run_experiment` makes them, bit for bit (an unstable point
+    is not run). The loops are built here, each once (a call's points outnumber loop_model's cache); their
+    poles come from the core in a stack per loop size, the numbers with which run_experiment checks one."""
     loops = [loop_model(*m) for m in models]
     poles: list[np.ndarray] = [np.empty(0)] * len(models)
     sizes: dict[int, list[int]] = {}
@@ -250,33 +249,24 @@ def _core_sweep(
     for same in sizes.values():
         for j, values in zip(same, eigenvalues(np.stack([loops[j].M for j in same]), workers)):
             poles[j] = values
-    given, ok = [], []
-    for (system, spec), seed, loop, p in zip(models, seeds, loops, poles):
+    given = []  # (index, rig, core arguments, settle periods, the two experiments' seeds) per stable point
+    for j, ((system, spec), seed, loop, p) in enumerate(zip(models, seeds, loops, poles)):
         try:
             checked_poles(p, str)  # run_experiment's stability test
         except UnstableLoopError:
-            ok.append(False)
             continue
-        ok.append(True)
         require(excitation.fs == spec.fs, "excitation.fs", excitation.fs, f"the controller's fs ({spec.fs} Hz)")
         settle = settle_periods
         if settle is None:
             settle = 0 if start == "steady" else settle_for(system, spec.fs, p, excitation.period_samples)
-        given.append((system, core_args(loop, system, outputs=2), settle, experiment_seeds(int(seed), 2)))
-    out: list[tuple[tuple[np.ndarray, ...], bool]] = [((), False)] * len(models)
-    if given:
-        args: dict[str, Any] = {
-            name: [a[name] for _, a, _, _ in given] for name in given[0][1]
-        }  # a list per model matrix
-        H, receptance, var_re, var_im = _core.mimo_line_sweep(
-            **args, period_forces=experiment_forces(excitation, 2), settle_periods=[s for _, _, s, _ in given],
-            periods=periods, seeds=np.array([s for _, _, _, s in given], dtype=np.uint64),
-            steady_start=start == "steady", bins=excitation.harmonics, workers=workers)  # fmt: skip
-        freq = excitation.harmonics * excitation.f0  # as run_experiment computes them, to the bit
-        parts = iter(range(len(given)))
-        for j, stable in enumerate(ok):
-            if stable:
-                at = next(parts)
-                mech = given[at][0].mechanics()
-                out[j] = ((*coefficients(H[at], var_re[at], var_im[at], freq, mech), receptance[at]), True)
-    return out
+        given.append((j, system, core_args(loop, system, outputs=2), settle, experiment_seeds(int(seed), 2)))
+    if not given:
+        return
+    args: dict[str, Any] = {name: [g[2][name] for g in given] for name in given[0][2]}  # a list per matrix
+    H, receptance, var_re, var_im = _core.mimo_line_sweep(
+        **args, period_forces=experiment_forces(excitation, 2), settle_periods=[g[3] for g in given], periods=periods,
+        seeds=np.array([g[4] for g in given], dtype=np.uint64), steady_start=start == "steady",
+        bins=excitation.harmonics, workers=workers)  # fmt: skip
+    freq = excitation.harmonics * excitation.f0  # as run_experiment computes them, to the bit
+    for at, (j, system, *_) in enumerate(given):
+        yield j, (*coefficients(H[at], var_re[at], var_im[at], freq, system.mechanics()), receptance[at])

@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import sys
 
-from .. import plots
 from .._dispatch import register, register_recordings
 from .._ross import coefficient_arrays, to_ross
+from ..plots import plot_coefficients2
 from ._command import add_two_axis_options, run_two_axis, save_estimate2, summary2
 from ._experiment import (
     SIGNS,
@@ -44,8 +44,6 @@ from ._model import (
     stability_margin,
 )
 from ._rig import TwoAxisRig
-
-plot_coefficients2 = plots.plot_coefficients2
 
 __all__ = [
     "SIGNS",
