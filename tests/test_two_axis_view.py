@@ -38,6 +38,8 @@ def test_paths_of_a_two_axis_sweep() -> None:
     dotted, _ = system.point_model(rig, PID, {"x.amp_bandwidth": 1500.0, "sensor_angle": 0.02})
     underscored, _ = ta.point_model2(rig, PID, {"x_amp_bandwidth": 1500.0, "sensor_angle": 0.02})
     assert dotted == underscored == replace(rig, x=replace(rig.x, amp_bandwidth=1500.0), sensor_angle=0.02)
+    one = af.Rig.paper()  # one axis: the rig is its own chain
+    assert system.point_model(one, PID, {"amp_bandwidth": 2000.0})[0] == replace(one, amp_bandwidth=2000.0)
     _, cross = ta.point_model2(rig, [[PID, PID], [None, PID]], {"cross_kd": 0.5, "kp": 2500.0})
     assert cross.entries[0][1].kd == 0.5 and cross.entries[0][0].kd == PID.kd and cross.entries[1][0] is None
     assert cross.entries[0][0].kp == cross.entries[1][1].kp == 2500.0 and cross.entries[0][1].kp == PID.kp

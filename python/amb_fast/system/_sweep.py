@@ -135,9 +135,13 @@ def point_model(rig: System, controller: ControllerSpec, values: dict[str, float
             rig = _with(rig, "rotor.speed" if rotor_speed else path, value, path, expected)
     if any(axis_changes):
         axes = tuple(replace(a, **changes) if changes else a for a, changes in zip(rig.axes, axis_changes))
-        # A rig holds its chains as a tuple ``axes`` (a rotor) or one field per axis, named as the axis (x, y).
-        given = {"axes": axes} if "axes" in {f.name for f in fields(rig)} else dict(zip(names, axes))  # type: ignore[arg-type]
-        rig = replace(rig, **given)  # type: ignore[type-var]
+        # A rig holds its chains as a tuple ``axes`` (a rotor), one field per axis named as the axis (x, y),
+        # or is its own one chain (a Rig).
+        if tuple(rig.axes) == (rig,):
+            rig = axes[0]
+        else:
+            given = {"axes": axes} if "axes" in {f.name for f in fields(rig)} else dict(zip(names, axes))  # type: ignore[arg-type]
+            rig = replace(rig, **given)  # type: ignore[type-var]
     return rig, ControllerMatrix(tuple(tuple(row) for row in entries), spec.fs)
 
 
