@@ -196,7 +196,7 @@ def test_two_axis_and_rotor_sweeps_park_the_pools_too(monkeypatch: pytest.Monkey
         pytest.skip("no OpenBLAS built on pthreads in this process")
     monkeypatch.setattr(_blas, "_native_thread_running", lambda: True)  # (as in seen_in_core)
     from amb_fast.system import _sweep as rotor_sweep
-    from amb_fast.two_axis import _sweep as two_axis_sweep
+    from amb_fast.system import _sweep as two_axis_sweep  # one sweep module for every N
 
     seen: list[tuple[set[int], list[int]]] = []
     core = two_axis_sweep._core

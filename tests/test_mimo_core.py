@@ -11,7 +11,8 @@ import pytest
 import amb_fast as af
 from amb_fast import _core
 from amb_fast import two_axis as ta
-from amb_fast.two_axis._experiment import _core_args, excitation_pair, loop_model
+from amb_fast.system._experiment import core_args as _core_args
+from amb_fast.two_axis import excitation_pair, loop_model
 from moments import assert_same_moments
 
 PID = af.PID.paper()

@@ -12,7 +12,7 @@ import pytest
 import amb_fast as af
 import amb_fast.two_axis as ta
 from amb_fast import _sweep as one_axis_sweep
-from amb_fast.two_axis import _sweep
+from amb_fast.system import _experiment, _sweep
 
 FIELDS = ("k", "c", "k_std", "c_std", "receptance")
 
@@ -48,17 +48,17 @@ def test_every_point_equals_its_own_experiment_on_threads_and_executors(start, m
 def test_a_failing_point_raises(monkeypatch) -> None:
     """On the executor's threads and in the core's call: an error that is not instability is not a NaN point."""
     sphs = af.schroeder_multisine(f0=10.0, f_max=50.0)
-    real = _sweep._point_args
+    real = _experiment.core_args
     calls = []
 
-    def failing(rig, *args):  # noqa: ANN001, ANN002, ANN202
+    def failing(loop, rig, *args, **kwargs):  # noqa: ANN001, ANN002, ANN003, ANN202
         calls.append(rig.kxy)
         if rig.kxy == 2e3:
             raise ValueError("disk full")
-        return real(rig, *args)
+        return real(loop, rig, *args, **kwargs)
 
-    monkeypatch.setattr(_sweep, "_point_args", failing)
-    monkeypatch.setattr(ta._experiment, "_point_args", failing)
+    monkeypatch.setattr(_sweep, "core_args", failing)
+    monkeypatch.setattr(_experiment, "core_args", failing)
     with pytest.raises(ValueError, match="disk full"):
         ta.sweep(ta.TwoAxisRig.paper(), af.PID.paper(), sphs, periods=2, kxy=[0.0, 1e3, 2e3, 3e3])
     with ThreadPoolExecutor(2) as pool, pytest.raises(ValueError, match="disk full"):

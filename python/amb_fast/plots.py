@@ -137,6 +137,60 @@ def plot_coefficients(
     return fig
 
 
+def plot_coefficients2(estimate: EstimateN, *, smoothed: bool = False, effective: tuple | None = None) -> Figure:
+    """Every stiffness and damping coefficient of an N-axis estimate over frequency: a 2 x N^2 grid of axes.
+
+    Parameters
+    ----------
+    estimate : EstimateN
+        An estimate of N axes (two: :func:`amb_fast.two_axis.run_experiment`, :func:`amb_fast.two_axis.identify`).
+    smoothed : bool
+        Plot the median-filtered ``k_smooth``, ``c_smooth`` instead of the raw ``k``, ``c``. The bands
+        are always +-1.96 standard errors of the raw estimate.
+    effective : (K_eff, C_eff), optional
+        Effective matrices at ``estimate.freq`` (N/m, N s/m; shape (lines, N, N)), as
+        :func:`amb_fast.two_axis.effective_coefficients` returns them: drawn as dashed lines.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Top row ``kxx, kxy, kyx, kyy`` (N/m), bottom row ``cxx, cxy, cyx, cyy`` (N s/m) for two axes (every
+        entry ``k<i><j>`` of the axes' names for N), against frequency (Hz). Needs matplotlib (the ``plot``
+        extra).
+
+    Examples
+    --------
+    >>> rig = af.TwoAxisRig(x=af.Rig.paper(), y=af.Rig.paper(), kxy=1e4, kyx=-1e4)
+    >>> est = af.two_axis.run_experiment(rig, af.PID.paper(), af.schroeder_multisine(), seed=1)
+    >>> fig = af.plot_coefficients2(est, effective=af.two_axis.effective_coefficients(rig, af.PID.paper(), est.freq))
+    >>> [ax.get_title() for ax in fig.axes[4:]]
+    ['cxx (N s/m)', 'cxy (N s/m)', 'cyx (N s/m)', 'cyy (N s/m)']
+    """
+    k = estimate.k_smooth if smoothed else estimate.k
+    c = estimate.c_smooth if smoothed else estimate.c
+    names = estimate.axes
+    entries = [(i, j) for i in range(len(names)) for j in range(len(names))]
+    fig, axes = _pyplot().subplots(2, len(entries), figsize=(3.5 * len(entries), 6), sharex=True, squeeze=False)
+    for col, (i, j) in enumerate(entries):
+        for row, (values, std, unit, name) in enumerate(((k, estimate.k_std, "N/m", "k"),
+                                                         (c, estimate.c_std, "N s/m", "c"))):  # fmt: skip
+            ax = axes[row, col]
+            ax.plot(estimate.freq, values[:, i, j], label="actual")
+            ax.fill_between(estimate.freq, values[:, i, j] - 1.96 * std[:, i, j],
+                            values[:, i, j] + 1.96 * std[:, i, j], alpha=0.3)  # fmt: skip
+            if effective is not None:
+                ax.plot(estimate.freq, effective[row][:, i, j], "--", label="effective")
+            ax.set_title(f"{name}{names[i]}{names[j]} ({unit})")
+            ax.set_xscale("log")  # as every other coefficient figure
+            ax.grid(True, which="both", alpha=0.3)
+            if row == 1:
+                ax.set_xlabel("frequency (Hz)")
+                _damping_scale(ax, estimate.freq, [values[:, i, j]])
+    axes[0, 0].legend()
+    _tight_layout(fig)
+    return fig
+
+
 def plot_effective(study: PaperStudy) -> Figure:
     """Paper Fig. 4: effective stiffness and damping from the theoretical PID."""
     return plot_coefficients(study.freq, study.k_eff, study.c_eff, title="Effective stiffness and damping (eq. 5)")

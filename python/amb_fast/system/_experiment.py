@@ -9,7 +9,9 @@ structure's own known dynamics, ``K + j w C = H + w^2 Mb - j w W Gb`` (paper eq.
 
 from __future__ import annotations
 
+import functools
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any, ClassVar, Literal
@@ -34,11 +36,15 @@ from ._model import LoopModel, System, known_dynamics, loop_model, require_stabl
 from ._unbalance import with_unbalance
 
 
+@functools.lru_cache(maxsize=8)
 def hadamard_signs(n: int) -> np.ndarray:
     """(n experiments, n axes) force signs: the first ``n`` rows and columns of a Sylvester Hadamard matrix
-    (one axis ``[[1]]``; two ``[[1, 1], [1, -1]]``), invertible for every ``n`` up to 4 and all powers of 2."""
+    (one axis ``[[1]]``; two ``[[1, 1], [1, -1]]``), invertible for every ``n`` up to 4 and all powers of 2.
+    Read-only (made once per ``n``)."""
     size = 1 << max(0, (n - 1).bit_length())
-    return scipy.linalg.hadamard(size).astype(float)[:n, :n]
+    signs = scipy.linalg.hadamard(size).astype(float)[:n, :n]
+    signs.flags.writeable = False
+    return signs
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,21 +161,29 @@ class EstimateN(ArrayRecord):
     def bearing(self, name: str) -> BearingEstimate:
         """The 2x2 view of one bearing (``"A"`` or ``"B"`` of a rotor): its ``x`` and ``y`` axes' rows and
         columns of every matrix (the cross-bearing entries left out)."""
-        rows = [j for j, axis in enumerate(self.axes) if axis.split(".")[0] == name]
-        bearings = sorted({axis.split(".")[0] for axis in self.axes if "." in axis})
+        groups = bearing_axes(self.axes)
+        rows = groups.get(name, [])
+        bearings = [g for g in groups if g]
         require(len(rows) == 2, "bearing", name, f"one of {bearings} (the estimate's axes: {self.axes})")
         pick = np.ix_(range(self.freq.size), rows, rows)
         return BearingEstimate(name, self.freq, self.k[pick], self.c[pick], self.k_smooth[pick], self.c_smooth[pick],
                                self.k_std[pick], self.c_std[pick], self.H[pick])  # fmt: skip
 
-    def to_ross(self, nodes: tuple[int, int], *, smoothed: bool = False, **kwargs: Any) -> list[Any]:
-        """One ``ross.BearingElement`` per bearing (A at ``nodes[0]``, B at ``nodes[1]``), each holding its
-        2x2 coefficients over the lines (see :func:`amb_fast.two_axis.to_ross`; the ``ross`` extra).
+    def to_ross(self, nodes: int | Sequence[int], *, smoothed: bool = False, **kwargs: Any) -> Any:
+        """``ross.BearingElement`` s holding the coefficients over the lines (the ``ross`` extra; see
+        :func:`amb_fast.two_axis.to_ross`): two axes ``x``, ``y`` (one bearing) give one element at node
+        ``nodes``; a rotor's bearings one each, A at ``nodes[0]``, B at ``nodes[1]``, as a list.
 
         ROSS's bearing element couples the two axes of one node only: the entries between the bearings
         (A's force from B's displacement, non-zero with probes off the bearing planes or a process between
         them) cannot go into it, and a :class:`UserWarning` says how large they are."""
-        require(isinstance(nodes, (tuple, list)) and len(nodes) == 2, "nodes", nodes, "(node of A, node of B)")
+        groups = bearing_axes(self.axes)
+        require(all(len(rows) == 2 for rows in groups.values()), "estimate axes", self.axes,
+                "two axes (x, y) per bearing for ROSS")  # fmt: skip
+        if len(groups) == 1:
+            return to_ross(self, nodes, smoothed=smoothed, **kwargs)  # type: ignore[arg-type]
+        require(isinstance(nodes, (tuple, list)) and len(nodes) == len(groups), "nodes", nodes,
+                f"one node per bearing {tuple(groups)}")  # fmt: skip
         k = self.k_smooth if smoothed else self.k
         bearing_of = np.array([axis.split(".")[0] for axis in self.axes])
         cross = bearing_of[:, None] != bearing_of[None, :]
@@ -178,13 +192,33 @@ class EstimateN(ArrayRecord):
             warnings.warn(f"to_ross: the cross-bearing stiffness (A from B and B from A), up to {worst:.3g} of the "
                           "largest within-bearing entry, cannot go into ROSS's BearingElement and is left out",
                           UserWarning, stacklevel=2)  # fmt: skip
-        return [to_ross(self.bearing(name), int(n), smoothed=smoothed, tag=f"amb_{name}", **kwargs)
-                for name, n in zip(("A", "B"), nodes)]  # fmt: skip
+        return [to_ross(self.bearing(name), n, smoothed=smoothed, tag=f"amb_{name}", **kwargs)
+                for name, n in zip(groups, nodes)]  # type: ignore[arg-type]  # fmt: skip
+
+    def summary(self, at: Sequence[float] = (10.0, 40.0, 100.0, 200.0)) -> str:
+        """A text table of every entry of K (N/m) and C (N s/m) at the lines nearest ``at`` (Hz)."""
+        names = [a + b for a in self.axes for b in self.axes]
+        out = [f"{'f (Hz)':>8} " + " ".join(f"{'k' + n + ' (N/m)':>14}" for n in names) + " "
+               + " ".join(f"{'c' + n + ' (Ns/m)':>14}" for n in names)]  # fmt: skip
+        for f in at:
+            j = int(np.argmin(np.abs(self.freq - f)))
+            out.append(f"{self.freq[j]:8.1f} " + " ".join(f"{v:14.6g}" for v in self.k[j].ravel()) + " "
+                       + " ".join(f"{v:14.6g}" for v in self.c[j].ravel()))  # fmt: skip
+        return "\n".join(out)
 
     save = _results.save_estimate  # .nc, .npz or .csv, checksummed; amb_fast.load_estimate reads it back
     to_xarray = _results.estimate_to_xarray
     to_dataframe = _results.estimate_to_dataframe
     plot = plot_coefficients_n
+
+
+def bearing_axes(axes: tuple[str, ...]) -> dict[str, list[int]]:
+    """Each bearing's axes (indices), by the name before the dot (``A.x``: bearing ``A``); axes without a
+    dot (``x``, ``y``) are one bearing, named ``""``."""
+    groups: dict[str, list[int]] = {}
+    for j, axis in enumerate(axes):
+        groups.setdefault(axis.split(".")[0] if "." in axis else "", []).append(j)
+    return groups
 
 
 @dataclass(frozen=True, eq=False)
@@ -230,17 +264,64 @@ def estimate(
     experiment), complex, unscaled DFT bins; the displacements are the probes' readings (the structure's
     ``readout`` is applied here). ``H = F Y^-1`` per line with F, Y the period means; its standard errors
     from the linearised ``dH = (dF - H dY) Y^-1`` of every period."""
-    Yp = np.ascontiguousarray(mechanics.readout @ displacement_lines)
+    N = mechanics.axes
+    as_read = np.array_equal(mechanics.readout, np.eye(N))  # the probes' readings as they are: no product
+    Yp = displacement_lines if as_read else np.ascontiguousarray(mechanics.readout @ displacement_lines)
     require(force_lines.shape[0] >= 2, "periods", force_lines.shape[0], ">= 2 (standard errors need at least two)")
-    H, receptance, F, Y, var_re, var_im = _core.estimate_nxn(force_lines, Yp)
-    actual = H - known_dynamics(mechanics, freq)
-    w = (2 * np.pi * freq)[:, None, None]
-    k, c = actual.real, actual.imag / w
+    # Two axes: the core's closed-form 2x2 (a seventh of the general solve's time; the same to rounding).
+    H, receptance, F, Y, var_re, var_im = (_core.estimate_2x2 if N == 2 else _core.estimate_nxn)(force_lines, Yp)
+    k, c, k_std, c_std = coefficients(H, var_re, var_im, freq, mechanics)
     amplitude = 2.0 / period
     return EstimateN(freq=freq, H=H, receptance=receptance, k=k, c=c, k_smooth=median_lines(k, median_window),
-                     c_smooth=median_lines(c, median_window), k_std=np.sqrt(var_re), c_std=np.sqrt(var_im) / w,
-                     force=amplitude * F, displacement=amplitude * Y, periods=int(force_lines.shape[0]),
-                     axes=mechanics.names)  # fmt: skip
+                     c_smooth=median_lines(c, median_window), k_std=k_std, c_std=c_std, force=amplitude * F,
+                     displacement=amplitude * Y, periods=int(force_lines.shape[0]), axes=mechanics.names)  # fmt: skip
+
+
+def coefficients(
+    H: np.ndarray, var_re: np.ndarray, var_im: np.ndarray, freq: np.ndarray, mechanics: Mechanics
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Actual k (N/m), c (N s/m) and their standard errors from ``H = F Y^-1`` and the variances of its
+    parts, per line (``freq``, Hz, along the third axis from the end: (..., lines, N, N))."""
+    actual = H - _known_dynamics(mechanics, freq)
+    w = (2 * np.pi * freq)[:, None, None]
+    return actual.real, actual.imag / w, np.sqrt(var_re), np.sqrt(var_im) / w
+
+
+_known: dict[tuple, np.ndarray] = {}
+
+
+def _known_dynamics(mechanics: Mechanics, freq: np.ndarray) -> np.ndarray:
+    """:func:`known_dynamics`, read-only, kept per structure and lines: repeated experiments and a sweep's
+    points over a process or a gain share them (the key costs a twentieth of making them)."""
+    parts = (mechanics.mass, mechanics.gyroscopic, mechanics.actuators, mechanics.probes, mechanics.readout, freq)
+    key = (mechanics.coordinates, mechanics.axes, mechanics.speed, b"".join(a.tobytes() for a in parts))
+    known = _known.get(key)
+    if known is None:
+        if len(_known) >= 64:
+            _known.clear()
+        known = _known[key] = known_dynamics(mechanics, freq)
+        known.flags.writeable = False
+    return known
+
+
+_last_forces: tuple[np.ndarray, np.ndarray] | None = None
+
+
+def experiment_forces(excitation: Multisine, n: int) -> np.ndarray:
+    """The n experiments' forces, (experiment, sample, axis): experiment ``e`` drives axis ``j`` with
+    ``hadamard_signs(n)[e, j] s``. Read-only; the last one is kept, as repeated experiments and a sweep's
+    points share their excitation, and comparing the samples costs a quarter of making them."""
+    global _last_forces
+    last, samples = _last_forces, excitation.samples
+    if last is not None and last[1].shape[0] == n and last[0].shape == samples.shape:
+        if np.array_equal(last[0], samples):
+            return last[1]
+    forces, signs = np.empty((n, samples.size, n)), hadamard_signs(n)
+    for e, j in np.ndindex(n, n):  # a broadcast product over a short last axis takes ten times as long
+        np.multiply(signs[e, j], samples, out=forces[e, :, j])
+    forces.flags.writeable = False
+    _last_forces = (samples.copy(), forces)
+    return forces
 
 
 def experiment_seeds(seed: int | None, n: int) -> list[int]:
@@ -306,8 +387,7 @@ def run_experiment(
     if settle_periods is None:
         settle_periods = 0 if start == "steady" else settle_for(system, spec.fs, poles, excitation.period_samples)
     settle = integer("settle_periods", settle_periods, 0)
-    signs = hadamard_signs(N)
-    forces = signs[:, None, :] * excitation.samples[None, :, None]  # (experiment, sample, axis)
+    forces = experiment_forces(excitation, N)  # (experiment, sample, axis)
     seeds = experiment_seeds(seed, N)
     harmonics = excitation.harmonics
     args = amb_args(model, system) if exciter == "amb" else core_args(model, system, outputs=N)

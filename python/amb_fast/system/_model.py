@@ -387,4 +387,6 @@ def known_dynamics(mechanics: Mechanics, freq: np.ndarray) -> np.ndarray:
     """``-w^2 Mb + j w W Gb`` in the estimate's frame (the structure's own dynamic stiffness at the bearing
     planes, a flexible one's with its bending: what ``k``, ``c`` remove from ``H``; no mass loading: paper
     eq. 9), shape (len(freq), N, N)."""
-    return mechanics.dynamic_stiffness(freq) @ np.linalg.inv(mechanics.frame)
+    dynamics = mechanics.dynamic_stiffness(freq)
+    frame = mechanics.frame
+    return dynamics if np.array_equal(frame, np.eye(len(frame))) else dynamics @ np.linalg.inv(frame)  # I: no product

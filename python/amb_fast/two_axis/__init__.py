@@ -3,10 +3,10 @@
 Here live :class:`TwoAxisRig` (two one-axis rigs on one rotor, a cross-coupling process, rotated probes),
 the two-axis loop in closed form (:func:`predict`, :func:`closed_loop_poles`, :func:`stability_margin`,
 :func:`effective_coefficients`), its simulation on the compiled dense MIMO loop (:func:`simulate`), the
-two-experiment identification (:func:`run_experiment`, :func:`identify` giving an :class:`Estimate2`),
-sweeps over two-axis rigs, the export to ``ross.BearingElement`` (:func:`to_ross`) and a pure-numpy
-reference loop (:mod:`amb_fast.two_axis.reference`). Same names and signatures as the one-axis API,
-with a :class:`TwoAxisRig` in place of a :class:`~amb_fast.Rig`.
+two-experiment identification (:func:`run_experiment`, :func:`identify` giving an :class:`Estimate2`,
+the N-axis :class:`~amb_fast.system.EstimateN` of two axes), sweeps over two-axis rigs, the export to
+``ross.BearingElement`` (:func:`to_ross`) and a pure-numpy reference loop (:mod:`amb_fast.two_axis.reference`).
+Same names and signatures as the one-axis API, with a :class:`TwoAxisRig` in place of a :class:`~amb_fast.Rig`.
 """
 
 from __future__ import annotations
@@ -15,7 +15,20 @@ import sys
 
 from .._dispatch import register, register_recordings
 from .._ross import coefficient_arrays, to_ross
-from ._experiment import SIGNS, Estimate2, Trace2, excitation_pair, identify, run_experiment, simulate
+from ..plots import plot_coefficients2
+from ._command import add_two_axis_options, run_two_axis, save_estimate2, summary2
+from ._experiment import (
+    SIGNS,
+    Estimate2,
+    SweepResult2,
+    Trace2,
+    excitation_pair,
+    identify,
+    point_model2,
+    run_experiment,
+    simulate,
+    sweep,
+)
 from ._model import (
     ControllerMatrix,
     StabilityMargin2,
@@ -31,16 +44,6 @@ from ._model import (
     stability_margin,
 )
 from ._rig import TwoAxisRig
-from ._sweep import (
-    SweepResult2,
-    add_two_axis_options,
-    plot_coefficients2,
-    point_model2,
-    run_two_axis,
-    save_estimate2,
-    summary2,
-    sweep,
-)
 
 __all__ = [
     "SIGNS",

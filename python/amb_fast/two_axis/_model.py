@@ -32,12 +32,6 @@ def controller_matrix(controller: ControllerSpec) -> ControllerMatrix:
     return _control.controller_matrix(controller, 2)
 
 
-def mimo_controller(controller: ControllerSpec) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The controller matrix as one discrete state space from e[k] (2 probes, m) to the two current
-    commands (A), each entry's own states and delay line stacked block-diagonally."""
-    return _control.controller_state_space(controller_matrix(controller))
-
-
 def _rig(rig: Any) -> TwoAxisRig:
     require(isinstance(rig, TwoAxisRig), "rig", type(rig).__name__, "a TwoAxisRig")
     return rig

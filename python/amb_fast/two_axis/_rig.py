@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -90,6 +91,18 @@ class TwoAxisRig:
     def mechanics(self) -> Mechanics:
         """The rotor at the bearing plane as a structure of two coordinates ``(x, y)``: mass ``m I``, the
         process, actuators on ``x`` and ``y``, probes reading ``R^T q`` and reported as they read."""
-        m = self.mass
-        return Mechanics(m * np.eye(2), np.zeros((2, 2)), self.process_stiffness, self.process_damping, np.eye(2),
-                         self.rotation.T, np.eye(2), 0.0, ("x", "y"), ("x", "y"))  # fmt: skip
+        return planar_mechanics(self.mass, self.kxy, self.kyx, self.cxy, self.cyx, self.sensor_angle)
+
+
+@functools.lru_cache(maxsize=64)
+def planar_mechanics(
+    mass: float, kxy: float = 0.0, kyx: float = 0.0, cxy: float = 0.0, cyx: float = 0.0, angle: float = 0.0
+) -> Mechanics:
+    """A :class:`TwoAxisRig`'s structure (mass kg, the process N/m and N s/m, the probes' angle rad), once
+    per distinct one (every model of its loop and every estimate asks for it); read-only."""
+    c, s = np.cos(angle), np.sin(angle)
+    matrices = (mass * np.eye(2), np.zeros((2, 2)), np.array([[0.0, kxy], [kyx, 0.0]]),
+                np.array([[0.0, cxy], [cyx, 0.0]]), np.eye(2), np.array([[c, s], [-s, c]]), np.eye(2))  # fmt: skip
+    for matrix in matrices:
+        matrix.flags.writeable = False
+    return Mechanics(*matrices, 0.0, ("x", "y"), ("x", "y"))
