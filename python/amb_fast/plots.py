@@ -417,7 +417,7 @@ def plot_coefficients_n(
             ax.tick_params(labelsize=7)
             ax.xaxis.set_tick_params(labelbottom=True)
             if row == 1:
-                _damping_scale(ax, f, [values[:, i, j]])
+                _damping_scale(ax, f, [values[:, i, j]] + ([effective[1][:, i, j]] if effective is not None else []))
                 ax.set_xlabel("frequency (Hz)", fontsize=7)
     axes[0, entries[0][1] if grid else 0].legend(fontsize=7)
     _tight_layout(fig)
