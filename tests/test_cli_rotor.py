@@ -51,4 +51,33 @@ def test_bad_options(capsys) -> None:  # noqa: ANN001
     status, _, err = run(capsys, "rotor", "unbalance", "--unbalance", "1e-4,0.1")
     assert status == 2 and "--unbalance must be 'm_e,z,phase'" in err
     status, _, err = run(capsys, "rotor", "sensitivity", "--figure", "s.png")
-    assert status == 2 and "--figure goes with campbell and unbalance" in err
+    assert status == 2 and "--figure goes with experiment, campbell and unbalance" in err
+
+
+def test_the_experiment_step_prints_the_bearings_coefficients(capsys, tmp_path) -> None:  # noqa: ANN001
+    """`amb-fast rotor experiment` (new): the shakers' actual coefficients or, with --exciter amb, the process, at
+    the rotor's speed; the estimate saved and its figure written."""
+    status, out, _ = run(capsys, "rotor", "experiment", "--periods", "4", "--speeds", "1000",
+                         "--save", str(tmp_path / "e.npz"), "--figure", str(tmp_path / "e.png"))  # fmt: skip
+    assert status == 0 and "excited by shakers at the bearing planes: 10 N rms" in out
+    rig, pid = af.RotorRig.example(speed=1000.0), af.RotorRig.example_controller()
+    expected = af.run_experiment(rig, pid, af.schroeder_multisine(rms=10.0), periods=4, seed=1)
+    saved = af.load_estimate(tmp_path / "e.npz")
+    np.testing.assert_array_equal(saved.k, expected.k)
+    row = next(line for line in out.splitlines() if line.strip().startswith("40.0  A.x<B.x"))
+    assert float(row.split()[2]) == pytest.approx(expected.k[39, 0, 2], rel=1e-5)
+    assert (tmp_path / "e.png").stat().st_size > 0
+    status, out, _ = run(capsys, "rotor", "experiment", "--periods", "4", "--exciter", "amb")
+    assert status == 0 and "excited by the bearings (current commands): 1 A rms" in out and "process k" in out
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [(["campbell", "--exciter", "amb"], "--exciter goes with experiment, not campbell"),
+     (["experiment", "--rms", "-1"], "--rms must be a finite amplitude > 0 (N rms), got -1"),
+     (["experiment", "--save", "e.xlsx"], "--save must end in .nc, .npz, .csv, got 'e.xlsx'"),
+     (["sensitivity", "--save", "e.npz"], "--save goes with experiment, not sensitivity")],
+)  # fmt: skip
+def test_the_experiment_steps_options_are_checked_first(capsys, options, message) -> None:  # noqa: ANN001
+    status, _, err = run(capsys, "rotor", *options)
+    assert status == 2 and message in err and "Traceback" not in err

@@ -1,5 +1,6 @@
-"""``amb-fast rotor``: the Campbell diagram, the ISO 14839-3 sensitivity table and the unbalance run-up of a
-rotor on two magnetic bearings, described by a rotor file (TOML) or ``RotorRig.example()``."""
+"""``amb-fast rotor``: the identification of the bearings at speed (shakers or the bearings as exciters), the
+Campbell diagram, the ISO 14839-3 sensitivity table and the unbalance run-up of a rotor on two magnetic
+bearings, described by a rotor file (TOML) or ``RotorRig.example()``."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import numpy as np
 
 from .._excitation import schroeder_multisine
 from .._validate import integer
-from ..system import RotorRig, campbell, measure_sensitivity, unbalance_response
+from ..system import RotorRig, campbell, measure_sensitivity, run_experiment, unbalance_response
 from ..system._file import load_rotor
 from ._options import (
     FIGURE_SUFFIXES,
@@ -26,19 +27,33 @@ from ._options import (
 
 
 def add_rotor_parser(subparsers: Any, parents: list[argparse.ArgumentParser]) -> None:
-    rotor = subparsers.add_parser("rotor", allow_abbrev=False, parents=parents,
-                                  help="a rotor on two bearings: campbell | sensitivity | unbalance")  # fmt: skip
-    rotor.add_argument("step", choices=["campbell", "sensitivity", "unbalance"],
-                       help="campbell: poles against speed; sensitivity: the ISO 14839-3 table per axis; "
-                       "unbalance: the run-up's synchronous response")  # fmt: skip
+    rotor = subparsers.add_parser(
+        "rotor",
+        allow_abbrev=False,
+        parents=parents,
+        help="a rotor on two bearings: experiment | campbell | sensitivity | unbalance",
+    )
+    rotor.add_argument("step", choices=["experiment", "campbell", "sensitivity", "unbalance"],
+                       help="experiment: the bearings' 4x4 coefficients at speed; campbell: poles against speed; "
+                       "sensitivity: the ISO 14839-3 table per axis; unbalance: the run-up's synchronous "
+                       "response")  # fmt: skip
     rotor.add_argument("--rotor", type=Path, help="rotor file (.toml; default RotorRig.example() under its PID)")
     rotor.add_argument("--speeds", type=_values, help="rad/s, 'a,b,c' or 'start:stop:count' (default 0:6000:61 for "
-                       "campbell, 10:600:120 for unbalance; sensitivity: the rotor's speed)")  # fmt: skip
+                       "campbell, 10:600:120 for unbalance; experiment and sensitivity: the rotor's speed, or the "
+                       "first value given)")  # fmt: skip
+    rotor.add_argument("--exciter", choices=["shaker", "amb"], default="shaker",
+                       help="experiment: shakers at the bearing planes, or the bearings themselves (the multisine "
+                       "on the current commands; the force from coil current and probes)")  # fmt: skip
+    rotor.add_argument("--rms", type=float, help="experiment: the multisine's rms per axis (default 10 N with "
+                       "shakers, 1 A with --exciter amb)")  # fmt: skip
+    rotor.add_argument("--save", type=Path, help="experiment: write the estimate (.nc, .npz or .csv; load with "
+                       "amb_fast.load_estimate)")  # fmt: skip
     rotor.add_argument("--unbalance", default="1e-4,0.1,0",
                        help="m_e (kg m), z (m), phase (rad) of the unbalance (default 1e-4,0.1,0)")  # fmt: skip
-    rotor.add_argument("--periods", type=int, default=10, help="periods averaged (sensitivity; default 10)")
-    rotor.add_argument("--seed", type=int, default=1, help="seed of the probes' noise (sensitivity)")
-    rotor.add_argument("--figure", type=Path, help="write a figure (.png, .pdf or .svg): campbell and unbalance")
+    rotor.add_argument("--periods", type=int, default=10, help="periods averaged (experiment, sensitivity; default 10)")
+    rotor.add_argument("--seed", type=int, default=1, help="seed of the noise (experiment, sensitivity)")
+    rotor.add_argument("--figure", type=Path, help="write a figure (.png, .pdf or .svg): experiment, campbell and "
+                       "unbalance")  # fmt: skip
     rotor.set_defaults(func=cmd_rotor)
 
 
@@ -54,24 +69,69 @@ def cmd_rotor(args: argparse.Namespace) -> None:
     rig, pid = load_rotor(args.rotor) if args.rotor is not None else (RotorRig.example(), RotorRig.example_controller())
     if args.figure is not None:
         if args.step == "sensitivity":
-            raise UsageError("--figure goes with campbell and unbalance (sensitivity prints a table)")
+            raise UsageError("--figure goes with experiment, campbell and unbalance (sensitivity prints a table)")
         _needs("matplotlib", "plot", "--figure")
         check_output(args.figure, "--figure", FIGURE_SUFFIXES, args.overwrite)
+    for option, value in (("--exciter", args.exciter != "shaker"), ("--rms", args.rms is not None),
+                          ("--save", args.save is not None)):  # fmt: skip
+        if value and args.step != "experiment":
+            raise UsageError(f"{option} goes with experiment, not {args.step}")
+    if args.save is not None:
+        if args.save.suffix.lower() == ".nc":
+            _needs("h5netcdf", "xarray", "--save .nc")
+        check_output(args.save, "--save", (".nc", ".npz", ".csv"), args.overwrite)
+    if args.rms is not None and not (np.isfinite(args.rms) and args.rms > 0):
+        raise UsageError(f"--rms must be a finite amplitude > 0 ({'A' if args.exciter == 'amb' else 'N'} rms), "
+                         f"got {args.rms:g}")  # fmt: skip
     unbalance = _unbalance(args.unbalance) if args.step == "unbalance" else None
     defaults = {"campbell": np.linspace(0.0, 6000.0, 61), "unbalance": np.linspace(10.0, 600.0, 120)}
     speeds: np.ndarray = args.speeds if args.speeds is not None else defaults.get(args.step, np.zeros(1))
     if speeds.size == 0 or not np.all(np.isfinite(speeds)):
         raise UsageError(f"--speeds must be finite speeds in rad/s, got {args.speeds}")
-    if args.step == "sensitivity":  # options are mistakes before the run (exit status 2), not failed runs
+    if args.step in ("sensitivity", "experiment"):  # options are mistakes before the run (exit 2), not failed runs
         integer("--periods", args.periods, 2)
     _started(args)
     meta = {"command": f"rotor {args.step}", "rotor": str(args.rotor or "RotorRig.example()")}
-    if args.step == "campbell":
+    if args.step == "experiment":
+        _experiment(rig, pid, args, meta)
+    elif args.step == "campbell":
         _campbell(rig, pid, speeds, args, meta)
     elif args.step == "sensitivity":
         _sensitivity(rig, pid, args)
     else:
         _unbalance_run(rig, pid, speeds, unbalance, args, meta)
+
+
+def _experiment(rig: RotorRig, pid: Any, args: argparse.Namespace, meta: dict) -> None:
+    if args.speeds is not None:
+        rig = rig.at_speed(float(args.speeds[0]))
+    amb = args.exciter == "amb"
+    unit = "A" if amb else "N"
+    rms = args.rms if args.rms is not None else (1.0 if amb else 10.0)  # 10 N: a 10 kg rotor moves ~ 1 um
+    sphs = schroeder_multisine(f0=1.0, f_max=default_f_max(1.0, pid.fs, 200.0), rms=rms, fs=pid.fs)
+    est = run_experiment(rig, pid, sphs, exciter=args.exciter, periods=args.periods, seed=args.seed)
+    by = "the bearings (current commands)" if amb else "shakers at the bearing planes"
+    print(f"Bearing coefficients at {rig.rotor.speed:g} rad/s, excited by {by}: {rms:g} {unit} rms per axis, "
+          f"1-{sphs.freq[-1]:g} Hz, {args.periods} periods x {len(est.axes)} experiments")  # fmt: skip
+    if amb:
+        print("k, c: from H = F Y^-1 with F from the coil currents (the hold and the lags included); "
+              "process: the hold and the model's lags removed")  # fmt: skip
+    values = est.process if amb and est.process is not None else est.k + 2j * np.pi * est.freq[:, None, None] * est.c
+    label = "process" if amb else "actual"
+    print(f"{'f (Hz)':>7}  {'entry':<10} {label + ' k (N/m)':>16} {'+- (N/m)':>10} {label + ' c (N s/m)':>18}")
+    for f in (10.0, 40.0, 100.0, 200.0):
+        j = int(np.argmin(np.abs(est.freq - f)))
+        w = 2 * np.pi * est.freq[j]
+        for a, b in ((0, 0), (0, 1), (2, 2), (2, 3), (0, 2)):
+            print(f"{est.freq[j]:7.1f}  {est.axes[a] + '<' + est.axes[b]:<10} {values[j, a, b].real:16.6g} "
+                  f"{est.k_std[j, a, b]:10.3g} {values[j, a, b].imag / w:18.6g}")  # fmt: skip
+    if args.save is not None:
+        print(f"wrote {est.save(args.save)}")
+    if args.figure is not None:
+        from ..system import effective_coefficients
+
+        effective = effective_coefficients(rig, pid, est.freq) if not amb else None
+        _save_figure(est.plot(terms="direct", effective=effective), args.figure, meta)
 
 
 def _campbell(rig: RotorRig, pid: Any, speeds: np.ndarray, args: argparse.Namespace, meta: dict) -> None:
