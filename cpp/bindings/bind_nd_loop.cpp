@@ -7,28 +7,45 @@
 using namespace amb_fast;
 
 namespace {
-template <class T>
-T item(const py::dict& d, const char* key) {
-    if (!d.contains(key)) throw std::invalid_argument(std::string("nd_loop: missing argument ") + key);
-    return py::cast<T>(d[key]);
+using Eigen::MatrixXd, Eigen::VectorXd;
+
+// d[key] as a float64 array of `ndim` dimensions (viewed where it is one already: the Eigen caster's copy
+// through a second numpy array costs more than the assembly of a small loop).
+py::array_t<double, py::array::c_style | py::array::forcecast> array(const py::dict& d, const char* key, int ndim) {
+    PyObject* value = PyDict_GetItemString(d.ptr(), key);  // borrowed
+    if (!value) throw std::invalid_argument(std::string("nd_loop: missing argument ") + key);
+    auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(value);
+    if (!a || a.ndim() != ndim)
+        throw std::invalid_argument(std::string(key) + " must be a " + (ndim == 2 ? "matrix" : "vector") +
+                                    " of numbers");
+    return a;
+}
+MatrixXd matrix(const py::dict& d, const char* key) {
+    const auto a = array(d, key, 2);
+    return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(a.data(), a.shape(0),
+                                                                                                    a.shape(1));
+}
+VectorXd vector(const py::dict& d, const char* key) {
+    const auto a = array(d, key, 1);
+    return Eigen::Map<const VectorXd>(a.data(), a.shape(0));
+}
+double number(const py::dict& d, const char* key, double absent) {
+    PyObject* value = PyDict_GetItemString(d.ptr(), key);
+    return value ? py::cast<double>(py::handle(value)) : absent;
 }
 
 // One point's arguments (nd_loop's keywords), converted while the GIL is held.
 NdPoint point_of(const py::dict& d) {
-    using Eigen::MatrixXd, Eigen::VectorXd;
     NdPoint p;
-    p.structure = {item<MatrixXd>(d, "mass"),      item<MatrixXd>(d, "gyroscopic"), item<MatrixXd>(d, "stiffness"),
-                   item<MatrixXd>(d, "damping"),   item<MatrixXd>(d, "actuators"),  item<MatrixXd>(d, "probes"),
-                   item<double>(d, "speed")};
-    p.chains = {item<VectorXd>(d, "kyy"),          item<VectorXd>(d, "kiy"),
-                item<VectorXd>(d, "amp_bandwidth"), item<VectorXd>(d, "eddy_bandwidth"),
-                item<VectorXd>(d, "sensor_bandwidth"), item<VectorXd>(d, "mass_loading"),
-                item<VectorXd>(d, "dead_time"),     item<VectorXd>(d, "force_coupling_tau")};
-    p.fs = d.contains("fs") ? py::cast<double>(d["fs"]) : 0.0;
-    p.closed = d.contains("Ac");
-    if (p.closed)
-        p.controller = {item<MatrixXd>(d, "Ac"), item<MatrixXd>(d, "Bc"), item<MatrixXd>(d, "Cc"),
-                        item<MatrixXd>(d, "Dc")};
+    p.structure = {matrix(d, "mass"),      matrix(d, "gyroscopic"), matrix(d, "stiffness"),
+                   matrix(d, "damping"),   matrix(d, "actuators"),  matrix(d, "probes"),
+                   number(d, "speed", 0.0)};
+    p.chains = {vector(d, "kyy"),           vector(d, "kiy"),          vector(d, "amp_bandwidth"),
+                vector(d, "eddy_bandwidth"), vector(d, "sensor_bandwidth"), vector(d, "mass_loading"),
+                vector(d, "dead_time"),      vector(d, "force_coupling_tau")};
+    p.fs = number(d, "fs", 0.0);
+    p.closed = PyDict_GetItemString(d.ptr(), "Ac") != nullptr;
+    if (p.closed) p.controller = {matrix(d, "Ac"), matrix(d, "Bc"), matrix(d, "Cc"), matrix(d, "Dc")};
     return p;
 }
 

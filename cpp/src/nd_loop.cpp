@@ -1,7 +1,6 @@
 #include "amb_fast/nd_loop.hpp"
 
-#include <unsupported/Eigen/MatrixFunctions>
-
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -131,13 +130,51 @@ void continuous(const NdStructure& s, const NdChains& c, NdLoop& out) {
     }
 }
 
-// exp([[A, B], [0, 0]] h): [Phi, Gamma] over h.
+// A polynomial of the augmented matrix [[A, B], [0, 0]] keeps its form [[P, Q], [0, c I]]: a product of
+// two costs n^3 + n^2 m instead of (n + m)^3.
+struct Augmented {
+    MatrixXd P, Q;
+    double c;
+    Augmented operator*(const Augmented& y) const { return {P * y.P, P * y.Q + y.c * Q, c * y.c}; }
+    Augmented operator+(const Augmented& y) const { return {P + y.P, Q + y.Q, c + y.c}; }
+};
+
+// sum_k w[k] X^(2k + 2) + w0 I over (X^2, X^4, X^6).
+Augmented sum(const Augmented (&X)[3], const double (&w)[3], double w0) {
+    Augmented out{w[0] * X[0].P + w[1] * X[1].P + w[2] * X[2].P, w[0] * X[0].Q + w[1] * X[1].Q + w[2] * X[2].Q, w0};
+    out.P.diagonal().array() += w0;
+    return out;
+}
+
+// exp([[A, B], [0, 0]] h) = [[Phi, Gamma], [0, I]], returned as [Phi, Gamma]: scaling and squaring with the
+// [13/13] Pade approximant (Higham 2005, as Eigen's MatrixFunctions and scipy's expm), on the blocks.
 MatrixXd hold(const MatrixXd& A, const MatrixXd& B, double h) {
     const Index n = A.rows(), m = B.cols();
-    MatrixXd aug = MatrixXd::Zero(n + m, n + m);
-    aug.topLeftCorner(n, n) = A * h;
-    aug.topRightCorner(n, m) = B * h;
-    return MatrixXd(aug.exp()).topRows(n);
+    static constexpr double b[] = {64764752532480000.0, 32382376266240000.0, 7771770303897600.0,
+                                   1187353796428800.0,  129060195264000.0,   10559470521600.0,
+                                   670442572800.0,      33522128640.0,       1323241920.0,
+                                   40840800.0,          960960.0,            16380.0,
+                                   182.0,               1.0};
+    const double norm = std::max(h * A.cwiseAbs().colwise().sum().maxCoeff(), h * B.cwiseAbs().colwise().sum().maxCoeff());
+    int squarings = 0;
+    std::frexp(norm / 5.371920351148152, &squarings);  // theta_13
+    squarings = std::max(squarings, 0);
+    const double scale = std::ldexp(h, -squarings);
+    const Augmented X{A * scale, B * scale, 0.0};
+    const Augmented X2 = X * X, X4 = X2 * X2, X6 = X4 * X2;
+    const Augmented powers[3] = {X2, X4, X6};
+    const Augmented U = X * (X6 * sum(powers, {b[9], b[11], b[13]}, 0.0) + sum(powers, {b[3], b[5], b[7]}, b[1]));
+    const Augmented V = X6 * sum(powers, {b[8], b[10], b[12]}, 0.0) + sum(powers, {b[2], b[4], b[6]}, b[0]);
+    // (V - U)^-1 (V + U): both corners are b0 I, so the quotient's is I and its Q block (V - U)^-1 2 U.Q.
+    const Eigen::PartialPivLU<MatrixXd> lu(V.P - U.P);
+    MatrixXd Phi = lu.solve(V.P + U.P), Gamma = lu.solve(2.0 * U.Q);
+    for (int k = 0; k < squarings; ++k) {
+        Gamma = Phi * Gamma + Gamma;
+        Phi = Phi * Phi;
+    }
+    MatrixXd out(n, n + m);
+    out << Phi, Gamma;
+    return out;
 }
 
 // An axis with dead time m T + delta gets a command line (dead1 .. dead<m + (delta > 0)>): x[k+1] = Phi x
@@ -145,7 +182,6 @@ MatrixXd hold(const MatrixXd& A, const MatrixXd& B, double h) {
 void discrete(const NdChains& c, double fs, NdLoop& out) {
     const Index n = out.A.rows(), N = c.kyy.size();
     const double T = 1.0 / fs;
-    const MatrixXd whole = hold(out.A, out.B, T);
     std::vector<DeadTime> splits;
     Index size = n;
     for (Index j = 0; j < N; ++j) {
@@ -153,22 +189,31 @@ void discrete(const NdChains& c, double fs, NdLoop& out) {
         out.lines.push_back(splits.back().samples + (splits.back().fraction > 0));
         size += out.lines.back();
     }
+    double fraction = -1.0;  // axes of one dead time share the fraction's two holds
+    MatrixXd late, early, whole;
+    const auto holds = [&](double f) {
+        fraction = f;
+        late = hold(out.A, out.B, T - f), early = hold(out.A, out.B, f);
+    };
+    const auto first = std::find_if(splits.begin(), splits.end(), [](DeadTime d) { return d.fraction > 0; });
+    if (first == splits.end()) {
+        whole = hold(out.A, out.B, T);
+    } else {  // the sample as its two pieces: one matrix exponential fewer
+        holds(first->fraction);
+        whole.resize(n, n + 2 * N);
+        whole << late.leftCols(n) * early.leftCols(n), late.leftCols(n) * early.rightCols(2 * N) + late.rightCols(2 * N);
+    }
     out.Phi = MatrixXd::Zero(size, size);
     out.Gamma = MatrixXd::Zero(size, 2 * N);
     out.Phi.topLeftCorner(n, n) = whole.leftCols(n);
     out.Gamma.topLeftCorner(n, N) = whole.middleCols(n, N);
-    double fraction = -1.0;  // axes of one dead time share the fraction's two holds
-    MatrixXd late, early;
     Index at = n;
     for (Index j = 0; j < N; ++j) {
         const DeadTime split = splits[static_cast<std::size_t>(j)];
         const int line = out.lines[static_cast<std::size_t>(j)];
         Eigen::VectorXd G0 = whole.col(n + N + j);
         if (split.fraction > 0) {
-            if (split.fraction != fraction) {
-                fraction = split.fraction;
-                late = hold(out.A, out.B, T - fraction), early = hold(out.A, out.B, fraction);
-            }
+            if (split.fraction != fraction) holds(split.fraction);
             G0 = late.col(n + N + j);
             out.Phi.block(0, at + line - 1, n, 1) = late.leftCols(n) * early.col(n + N + j);
         }

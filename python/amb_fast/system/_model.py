@@ -73,27 +73,33 @@ def _core_args(system: System) -> tuple[Mechanics, dict[str, Any]]:
     N = mech.axes
     require(len(axes) == N, "axes", len(axes), f"{N} (one chain per controlled axis)")
     require(mech.coordinates >= N, "structure", f"{mech.coordinates} coordinates", f">= {N} (its axes)")
-    args: dict[str, Any] = {name: getattr(mech, name) for name in _STRUCTURE}
-    for name in _CHAIN:
-        args[name] = np.array([np.nan if getattr(a, name) is None else getattr(a, name) for a in axes], dtype=float)
-    return mech, args
+    chains = np.array([[getattr(a, name) for a in axes] for name in _CHAIN], dtype=float)  # None -> NaN
+    return mech, {**{name: getattr(mech, name) for name in _STRUCTURE}, **dict(zip(_CHAIN, chains))}
 
 
 _STRUCTURE = ("mass", "gyroscopic", "stiffness", "damping", "actuators", "probes", "speed")
 
 
-def _names(mech: Mechanics, parts: dict[str, Any]) -> tuple[Layout, list[str]]:
+def _names(mech: Mechanics, parts: dict[str, Any]) -> tuple[Layout, tuple[str, ...]]:
     """The plant's layout (from the core's indices) and the names of the axes' command lines."""
-    names = [""] * parts["A"].shape[0]
-    for k, coordinate in enumerate(mech.coordinate_names):
-        names[parts["position"][k]], names[parts["velocity"][k]] = coordinate, f"{coordinate}'"
-    for stage, key in (("i", "coil"), ("i_f", "eddy"), ("ys", "sensor")):
-        for label, at in zip(mech.names, parts[key]):
-            if at >= 0:
-                names[at] = f"{label}.{stage}"
-    layout = Layout(parts["position"], parts["velocity"], parts["coil"], parts["eddy"], parts["sensor"], tuple(names))
-    lines = [f"{label}.dead{j + 1}" for label, line in zip(mech.names, parts.get("lines", ())) for j in range(line)]
-    return layout, lines
+    return _named(mech.coordinate_names, mech.names, *(parts[key] for key in _LAYOUT), parts.get("lines", ()))
+
+
+_LAYOUT = ("position", "velocity", "coil", "eddy", "sensor")
+
+
+@functools.lru_cache(maxsize=256)
+def _named(coordinates: tuple[str, ...], axes: tuple[str, ...], *indices: tuple[int, ...]) -> tuple[Layout, tuple[str, ...]]:
+    *stages, lines = indices
+    names = [""] * sum(i >= 0 for at in stages for i in at)
+    for k, coordinate in enumerate(coordinates):
+        names[stages[0][k]], names[stages[1][k]] = coordinate, f"{coordinate}'"
+    for stage, at in zip(("i", "i_f", "ys"), stages[2:]):
+        for label, i in zip(axes, at):
+            if i >= 0:
+                names[i] = f"{label}.{stage}"
+    dead = tuple(f"{label}.dead{j + 1}" for label, line in zip(axes, lines) for j in range(line))
+    return Layout(*stages, tuple(names)), dead  # type: ignore[arg-type]
 
 
 def _read_only(*arrays: np.ndarray) -> None:
@@ -133,7 +139,7 @@ def discrete_plant(system: System, fs: float) -> tuple[np.ndarray, np.ndarray, t
     parts = _core.nd_loop(**args, fs=float(fs))
     _read_only(parts["Phi"], parts["Gamma"])
     layout, lines = _names(mech, parts)
-    return parts["Phi"], parts["Gamma"], layout.names + tuple(lines)
+    return parts["Phi"], parts["Gamma"], layout.names + lines
 
 
 @dataclass(frozen=True, eq=False)
