@@ -13,15 +13,15 @@ the one-axis plant's order; for two axes the two-axis rig's.
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any, Literal, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._equality import ArrayRecord
 from .. import _core
+from .._equality import ArrayRecord
 from .._linear import (
     StabilityMargin,
     checked_poles,
@@ -89,7 +89,9 @@ _LAYOUT = ("position", "velocity", "coil", "eddy", "sensor")
 
 
 @functools.lru_cache(maxsize=256)
-def _named(coordinates: tuple[str, ...], axes: tuple[str, ...], *indices: tuple[int, ...]) -> tuple[Layout, tuple[str, ...]]:
+def _named(
+    coordinates: tuple[str, ...], axes: tuple[str, ...], *indices: tuple[int, ...]
+) -> tuple[Layout, tuple[str, ...]]:
     *stages, lines = indices
     names = [""] * sum(i >= 0 for at in stages for i in at)
     for k, coordinate in enumerate(coordinates):
@@ -99,7 +101,8 @@ def _named(coordinates: tuple[str, ...], axes: tuple[str, ...], *indices: tuple[
             if i >= 0:
                 names[i] = f"{label}.{stage}"
     dead = tuple(f"{label}.dead{j + 1}" for label, line in zip(axes, lines) for j in range(line))
-    return Layout(*stages, tuple(names)), dead  # type: ignore[arg-type]
+    position, velocity, coil, eddy, sensor = stages
+    return Layout(position, velocity, coil, eddy, sensor, tuple(names)), dead
 
 
 def _read_only(*arrays: np.ndarray) -> None:
@@ -170,7 +173,9 @@ def _loop_args(system: System, controller: ControllerMatrix) -> tuple[Mechanics,
 def _loop_of(mech: Mechanics, controller: ControllerMatrix, parts: dict[str, Any]) -> LoopModel:
     layout, lines = _names(mech, parts)
     names = [*layout.names, *lines] + [f"controller{j}" for j in range(parts["M"].shape[0] - parts["Phi"].shape[0])]
-    return LoopModel(parts["M"], parts["Bf"], parts["Bn"], parts["C"], parts["Dn"], names, controller.fs, parts["poles"])
+    return LoopModel(
+        parts["M"], parts["Bf"], parts["Bn"], parts["C"], parts["Dn"], names, controller.fs, parts["poles"]
+    )
 
 
 @functools.lru_cache(maxsize=64)
