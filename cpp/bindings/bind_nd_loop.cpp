@@ -22,8 +22,8 @@ py::array_t<double, py::array::c_style | py::array::forcecast> array(const py::d
 }
 MatrixXd matrix(const py::dict& d, const char* key) {
     const auto a = array(d, key, 2);
-    return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(a.data(), a.shape(0),
-                                                                                                    a.shape(1));
+    return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+        a.data(), a.shape(0), a.shape(1));
 }
 VectorXd vector(const py::dict& d, const char* key) {
     const auto a = array(d, key, 1);
@@ -37,12 +37,16 @@ double number(const py::dict& d, const char* key, double absent) {
 // One point's arguments (nd_loop's keywords), converted while the GIL is held.
 NdPoint point_of(const py::dict& d) {
     NdPoint p;
-    p.structure = {matrix(d, "mass"),      matrix(d, "gyroscopic"), matrix(d, "stiffness"),
-                   matrix(d, "damping"),   matrix(d, "actuators"),  matrix(d, "probes"),
-                   number(d, "speed", 0.0)};
-    p.chains = {vector(d, "kyy"),           vector(d, "kiy"),          vector(d, "amp_bandwidth"),
-                vector(d, "eddy_bandwidth"), vector(d, "sensor_bandwidth"), vector(d, "mass_loading"),
-                vector(d, "dead_time"),      vector(d, "force_coupling_tau")};
+    p.structure = {matrix(d, "mass"),      matrix(d, "gyroscopic"), matrix(d, "stiffness"), matrix(d, "damping"),
+                   matrix(d, "actuators"), matrix(d, "probes"),     number(d, "speed", 0.0)};
+    p.chains = {vector(d, "kyy"),
+                vector(d, "kiy"),
+                vector(d, "amp_bandwidth"),
+                vector(d, "eddy_bandwidth"),
+                vector(d, "sensor_bandwidth"),
+                vector(d, "mass_loading"),
+                vector(d, "dead_time"),
+                vector(d, "force_coupling_tau")};
     p.fs = number(d, "fs", 0.0);
     p.closed = PyDict_GetItemString(d.ptr(), "Ac") != nullptr;
     if (p.closed) p.controller = {matrix(d, "Ac"), matrix(d, "Bc"), matrix(d, "Cc"), matrix(d, "Dc")};
@@ -52,11 +56,23 @@ NdPoint point_of(const py::dict& d) {
 // The pieces assembled: the plant, with fs its discrete form, with a controller the loop.
 py::dict result(NdLoop&& r) {
     py::dict out;
-    for (auto [name, v] : {std::pair{"position", &r.position}, {"velocity", &r.velocity}, {"coil", &r.coil},
-                           {"eddy", &r.eddy}, {"sensor", &r.sensor}, {"lines", &r.lines}})
+    for (auto [name, v] : {std::pair{"position", &r.position},
+                           {"velocity", &r.velocity},
+                           {"coil", &r.coil},
+                           {"eddy", &r.eddy},
+                           {"sensor", &r.sensor},
+                           {"lines", &r.lines}})
         out[name] = py::tuple(py::cast(*v));
-    for (auto [name, m] : {std::pair{"A", &r.A}, {"B", &r.B}, {"S", &r.S}, {"Phi", &r.Phi}, {"Gamma", &r.Gamma},
-                           {"M", &r.M}, {"Bf", &r.Bf}, {"Bn", &r.Bn}, {"C", &r.C}, {"Dn", &r.Dn}})
+    for (auto [name, m] : {std::pair{"A", &r.A},
+                           {"B", &r.B},
+                           {"S", &r.S},
+                           {"Phi", &r.Phi},
+                           {"Gamma", &r.Gamma},
+                           {"M", &r.M},
+                           {"Bf", &r.Bf},
+                           {"Bn", &r.Bn},
+                           {"C", &r.C},
+                           {"Dn", &r.Dn}})
         if (m->size()) out[name] = py::cast(std::move(*m));
     if (r.poles.size()) out["poles"] = py::cast(std::move(r.poles));
     return out;
@@ -68,7 +84,8 @@ void bind_nd_loop(py::module_& m) {
         "nd_loop",
         [](const py::kwargs& kwargs) {
             const NdPoint p = point_of(kwargs);
-            NdLoop r = interruptible([&] { return nd_loop(p.structure, p.chains, p.fs, p.closed ? &p.controller : nullptr); });
+            NdLoop r =
+                interruptible([&] { return nd_loop(p.structure, p.chains, p.fs, p.closed ? &p.controller : nullptr); });
             return result(std::move(r));
         },
         "The linear loop of N axes (amb_fast.system._model), keywords: the structure's mass, gyroscopic, stiffness, "

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <tuple>
 
 #include "amb_fast/blocks.hpp"
 #include "amb_fast/errors.hpp"
@@ -26,23 +27,31 @@ void require_shape(const char* name, const MatrixXd& m, Index rows, Index cols) 
 void validate(const NdStructure& s, const NdChains& c, double fs, const NdController* k) {
     const Index n = s.mass.rows(), N = s.actuators.rows();
     require(n >= 1 && N >= 1 && N <= n, "structure", shape(s.actuators), "N x n actuators with 1 <= N <= n");
-    for (auto [name, m] : {std::pair{"mass", &s.mass}, {"gyroscopic", &s.gyroscopic}, {"stiffness", &s.stiffness},
+    for (auto [name, m] : {std::pair{"mass", &s.mass},
+                           {"gyroscopic", &s.gyroscopic},
+                           {"stiffness", &s.stiffness},
                            {"damping", &s.damping}})
         require_shape(name, *m, n, n);
     require_shape("actuators", s.actuators, N, n);
     require_shape("probes", s.probes, N, n);
     require(std::isfinite(s.speed), "speed", s.speed, "finite (rad/s)");
-    for (auto [name, v] : {std::pair{"kyy", &c.kyy}, {"kiy", &c.kiy}, {"amp_bandwidth", &c.amp_bandwidth},
-                           {"eddy_bandwidth", &c.eddy_bandwidth}, {"sensor_bandwidth", &c.sensor_bandwidth},
-                           {"mass_loading", &c.mass_loading}, {"dead_time", &c.dead_time},
+    for (auto [name, v] : {std::pair{"kyy", &c.kyy},
+                           {"kiy", &c.kiy},
+                           {"amp_bandwidth", &c.amp_bandwidth},
+                           {"eddy_bandwidth", &c.eddy_bandwidth},
+                           {"sensor_bandwidth", &c.sensor_bandwidth},
+                           {"mass_loading", &c.mass_loading},
+                           {"dead_time", &c.dead_time},
                            {"force_coupling_tau", &c.force_coupling_tau}})
         require(v->size() == N, name, std::to_string(v->size()) + " entries", "one entry per axis");
     for (Index j = 0; j < N; ++j) {
         require(std::isfinite(c.kyy[j]), "kyy", c.kyy[j], "finite (N/m)");
         require(std::isfinite(c.kiy[j]), "kiy", c.kiy[j], "finite (N/A)");
-        for (auto [name, v] : {std::pair{"amp_bandwidth", &c.amp_bandwidth}, {"eddy_bandwidth", &c.eddy_bandwidth},
-                               {"sensor_bandwidth", &c.sensor_bandwidth}, {"force_coupling_tau", &c.force_coupling_tau}})
-            if (!std::isnan((*v)[j])) require_positive(name, (*v)[j], "Hz or s; NaN: absent");
+        for (auto [name, v, unit] : {std::tuple{"amp_bandwidth", &c.amp_bandwidth, "Hz; NaN: an ideal stage"},
+                                     {"eddy_bandwidth", &c.eddy_bandwidth, "Hz; NaN: an ideal stage"},
+                                     {"sensor_bandwidth", &c.sensor_bandwidth, "Hz; NaN: an ideal stage"},
+                                     {"force_coupling_tau", &c.force_coupling_tau, "s; NaN: DC coupled"}})
+            if (!std::isnan((*v)[j])) require_positive(name, (*v)[j], unit);
         require(std::isfinite(c.mass_loading[j]) && c.mass_loading[j] >= 0, "mass_loading", c.mass_loading[j],
                 "finite and >= 0 (kg)");
         require(std::isfinite(c.dead_time[j]) && c.dead_time[j] >= 0, "dead_time", c.dead_time[j],
@@ -57,8 +66,9 @@ void validate(const NdStructure& s, const NdChains& c, double fs, const NdContro
     require_shape("controller D", k->D, N, N);
 }
 
-// Per coordinate its position and velocity, each axis' chain after its coordinate (the first N).
-void lay_out(const NdChains& c, Index n, NdLoop& out) {
+// Per coordinate its position and velocity, each axis' chain after its coordinate (the first N); returns
+// the number of states.
+int lay_out(const NdChains& c, Index n, NdLoop& out) {
     const auto N = static_cast<std::size_t>(c.kyy.size());
     out.coil.assign(N, -1), out.eddy.assign(N, -1), out.sensor.assign(N, -1);
     int at = 0;
@@ -71,15 +81,12 @@ void lay_out(const NdChains& c, Index n, NdLoop& out) {
         if (!std::isnan(c.eddy_bandwidth[k])) out.eddy[j] = at++;
         if (!std::isnan(c.sensor_bandwidth[k])) out.sensor[j] = at++;
     }
+    return at;
 }
 
 void continuous(const NdStructure& s, const NdChains& c, NdLoop& out) {
     const Index n = s.mass.rows(), N = s.actuators.rows();
-    lay_out(c, n, out);
-    const Index size = static_cast<Index>(out.position.size() + out.velocity.size()) +
-                       std::count_if(out.coil.begin(), out.coil.end(), [](int i) { return i >= 0; }) +
-                       std::count_if(out.eddy.begin(), out.eddy.end(), [](int i) { return i >= 0; }) +
-                       std::count_if(out.sensor.begin(), out.sensor.end(), [](int i) { return i >= 0; });
+    const int size = lay_out(c, n, out);
     MatrixXd& A = out.A = MatrixXd::Zero(size, size);
     MatrixXd& B = out.B = MatrixXd::Zero(size, 2 * N);
     const MatrixXd& act = s.actuators;
@@ -117,14 +124,12 @@ void continuous(const NdStructure& s, const NdChains& c, NdLoop& out) {
             A(eddy, eddy) = -two_pi * c.eddy_bandwidth[j];
             (coil >= 0 ? A(eddy, coil) : B(eddy, N + j)) = two_pi * c.eddy_bandwidth[j];
         }
-        if (sensor >= 0) {
-            const double w = two_pi * c.sensor_bandwidth[j];
-            A(sensor, sensor) = -w;
-            out.S(j, sensor) = 1.0;
-        }
+        // The probe reads the structure through its lag, or directly.
+        const double w = sensor >= 0 ? two_pi * c.sensor_bandwidth[j] : 0.0;
+        if (sensor >= 0) A(sensor, sensor) = -w, out.S(j, sensor) = 1.0;
         for (Index k = 0; k < n; ++k) {
             const int p = out.position[static_cast<std::size_t>(k)];
-            if (sensor >= 0) A(sensor, p) += two_pi * c.sensor_bandwidth[j] * s.probes(j, k);
+            if (sensor >= 0) A(sensor, p) += w * s.probes(j, k);
             else out.S(j, p) = s.probes(j, k);
         }
     }
@@ -150,12 +155,22 @@ Augmented sum(const Augmented (&X)[3], const double (&w)[3], double w0) {
 // [13/13] Pade approximant (Higham 2005, as Eigen's MatrixFunctions and scipy's expm), on the blocks.
 MatrixXd hold(const MatrixXd& A, const MatrixXd& B, double h) {
     const Index n = A.rows(), m = B.cols();
-    static constexpr double b[] = {64764752532480000.0, 32382376266240000.0, 7771770303897600.0,
-                                   1187353796428800.0,  129060195264000.0,   10559470521600.0,
-                                   670442572800.0,      33522128640.0,       1323241920.0,
-                                   40840800.0,          960960.0,            16380.0,
-                                   182.0,               1.0};
-    const double norm = std::max(h * A.cwiseAbs().colwise().sum().maxCoeff(), h * B.cwiseAbs().colwise().sum().maxCoeff());
+    static constexpr double b[] = {64764752532480000.0,
+                                   32382376266240000.0,
+                                   7771770303897600.0,
+                                   1187353796428800.0,
+                                   129060195264000.0,
+                                   10559470521600.0,
+                                   670442572800.0,
+                                   33522128640.0,
+                                   1323241920.0,
+                                   40840800.0,
+                                   960960.0,
+                                   16380.0,
+                                   182.0,
+                                   1.0};
+    const double norm =
+        std::max(h * A.cwiseAbs().colwise().sum().maxCoeff(), h * B.cwiseAbs().colwise().sum().maxCoeff());
     int squarings = 0;
     std::frexp(norm / 5.371920351148152, &squarings);  // theta_13
     squarings = std::max(squarings, 0);
@@ -201,7 +216,8 @@ void discrete(const NdChains& c, double fs, NdLoop& out) {
     } else {  // the sample as its two pieces: one matrix exponential fewer
         holds(first->fraction);
         whole.resize(n, n + 2 * N);
-        whole << late.leftCols(n) * early.leftCols(n), late.leftCols(n) * early.rightCols(2 * N) + late.rightCols(2 * N);
+        whole << late.leftCols(n) * early.leftCols(n),
+            late.leftCols(n) * early.rightCols(2 * N) + late.rightCols(2 * N);
     }
     out.Phi = MatrixXd::Zero(size, size);
     out.Gamma = MatrixXd::Zero(size, 2 * N);
@@ -219,8 +235,8 @@ void discrete(const NdChains& c, double fs, NdLoop& out) {
         }
         if (split.samples == 0) out.Gamma.block(0, N + j, n, 1) = G0;
         else out.Phi.block(0, at + split.samples - 1, n, 1) = G0;
-        if (line > 0) out.Gamma(at, N + j) = 1.0;                                  // dead1' = u
-        for (int k = 1; k < line; ++k) out.Phi(at + k, at + k - 1) = 1.0;        // dead(k+1)' = dead(k)
+        if (line > 0) out.Gamma(at, N + j) = 1.0;                          // dead1' = u
+        for (int k = 1; k < line; ++k) out.Phi(at + k, at + k - 1) = 1.0;  // dead(k+1)' = dead(k)
         at += line;
     }
 }
@@ -256,7 +272,8 @@ void closed(const NdChains& c, double fs, const NdController& k, NdLoop& out) {
         }
         line += out.lines[a];
     }
-    out.poles = c.force_coupling_tau.unaryExpr([fs](double tau) { return std::isnan(tau) ? 0.0 : std::exp(-1.0 / (fs * tau)); });
+    out.poles = c.force_coupling_tau.unaryExpr(
+        [fs](double tau) { return std::isnan(tau) ? 0.0 : std::exp(-1.0 / (fs * tau)); });
 }
 }  // namespace
 

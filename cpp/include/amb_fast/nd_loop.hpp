@@ -17,9 +17,9 @@ struct NdStructure {
 
 // Each axis' chain, one entry per axis; NaN bandwidth: an ideal stage, NaN force_coupling_tau: DC.
 struct NdChains {
-    Eigen::VectorXd kyy, kiy;                                        // N/m, N/A
+    Eigen::VectorXd kyy, kiy;                                         // N/m, N/A
     Eigen::VectorXd amp_bandwidth, eddy_bandwidth, sensor_bandwidth;  // Hz
-    Eigen::VectorXd mass_loading, dead_time, force_coupling_tau;     // kg, s, s
+    Eigen::VectorXd mass_loading, dead_time, force_coupling_tau;      // kg, s, s
 };
 
 // The controller matrix from the N probes' e[k] (m) to the N current commands (A).
