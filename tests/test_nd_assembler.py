@@ -222,7 +222,7 @@ def core_args(**changes: Any) -> dict[str, Any]:
         (dict(mass=np.zeros((2, 2))), "mass (with the axes' mass loading) must be invertible"),
         (dict(probes=np.zeros((3, 2))), "probes must be 2x2, got 3x2"),
         (dict(kyy=np.array([1.0, np.nan])), "kyy must be finite (N/m), got nan"),
-        (dict(amp_bandwidth=np.array([-1.0, np.nan])), "amp_bandwidth must be a finite number > 0 (Hz; NaN: an ideal stage)"),
+        (dict(amp_bandwidth=np.array([-1.0, np.nan])), "amp_bandwidth must be a finite number > 0 (Hz; NaN: an ideal"),
         (dict(dead_time=np.array([0.0])), "dead_time must be one entry per axis, got 1 entries"),
         (dict(fs=-4000.0, Ac=np.zeros((0, 0)), Bc=np.zeros((0, 2)), Cc=np.zeros((2, 0)), Dc=np.eye(2)),
          "fs must be a finite number > 0 (Hz), got -4000"),
