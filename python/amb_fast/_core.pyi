@@ -2,6 +2,7 @@
 
 from collections.abc import Sequence
 from enum import Enum
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -215,3 +216,12 @@ def estimate_2x2(
 def estimate_nxn(
     force_lines: ArrayLike, displacement_lines: ArrayLike
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...
+
+# N axes (amb_fast.system._model): the one assembler of the linear loop. Keywords: the structure's mass,
+# gyroscopic, stiffness, damping (n x n), actuators, probes (N x n), speed (rad/s); per axis kyy, kiy,
+# amp_bandwidth, eddy_bandwidth, sensor_bandwidth (Hz, NaN: ideal), mass_loading (kg), dead_time (s),
+# force_coupling_tau (s, NaN: DC); optional fs (Hz) and Ac, Bc, Cc, Dc (the controller matrix). Returns the
+# layout (position, velocity, coil, eddy, sensor, lines: tuples of indices) and arrays A, B, S; with fs Phi,
+# Gamma; with the controller M, Bf, Bn, C, Dn, poles.
+def nd_loop(**arguments: ArrayLike | float) -> dict[str, Any]: ...
+def nd_loops(points: list[dict[str, Any]], workers: int = 1) -> list[dict[str, Any]]: ...

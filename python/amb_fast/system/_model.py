@@ -4,6 +4,7 @@ The continuous plant joins the structure (:class:`Mechanics`) with each axis' ch
 (amplifier and eddy-current lags, the probe's lag, mass loading at the bearing plane); it is discretised
 exactly (matrix exponential of the augmented ``[[A, B], [0, 0]] T``), with each axis' dead time as on one
 axis (whole samples into that axis' command line, the fraction by the modified z-transform of the hold).
+The compiled core assembles all of it (``_core.nd_loop``; many points on its threads: :func:`loop_models`).
 States, in order: per coordinate ``k`` its position ``<q>`` and velocity ``<q>'``, then the chain of axis ``k``
 (``i``, ``i_f``, ``ys`` as present); then each axis' command line (``dead1`` ..). For one axis that is
 the one-axis plant's order; for two axes the two-axis rig's.
@@ -12,29 +13,27 @@ the one-axis plant's order; for two axes the two-axis rig's.
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal, Protocol
+from typing import Any, Literal, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .. import _core
 from .._equality import ArrayRecord
 from .._linear import (
     StabilityMargin,
     checked_poles,
     controller_response,
-    dead_time_columns,
     eigenvalues,
     iso_zone,
-    loop_matrix,
-    split_dead_time,
     state_response,
     transducer_response,
-    zoh,
 )
 from .._mechanics import Mechanics
 from .._params import Rig
-from .._validate import require
+from .._validate import integer, require
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix, controller_state_space
 
 
@@ -63,89 +62,78 @@ class Layout:
     names: tuple[str, ...]
 
 
-def _layout(mechanics: Mechanics, axes: tuple[Rig, ...]) -> Layout:
-    names: list[str] = []
-    position, velocity = [], []
-    coil, eddy, sensor = [-1] * len(axes), [-1] * len(axes), [-1] * len(axes)
-    for k, coordinate in enumerate(mechanics.coordinate_names):
-        position.append(len(names))
-        names.append(coordinate)
-        velocity.append(len(names))
-        names.append(f"{coordinate}'")
-        if k < len(axes):
-            axis, label = axes[k], mechanics.names[k]
-            for stages, stage, bandwidth in ((coil, "i", axis.amp_bandwidth), (eddy, "i_f", axis.eddy_bandwidth),
-                                             (sensor, "ys", axis.sensor_bandwidth)):  # fmt: skip
-                if bandwidth is not None:
-                    stages[k] = len(names)
-                    names.append(f"{label}.{stage}")
-    return Layout(tuple(position), tuple(velocity), tuple(coil), tuple(eddy), tuple(sensor), tuple(names))
+_CHAIN = ("kyy", "kiy", "amp_bandwidth", "eddy_bandwidth", "sensor_bandwidth", "mass_loading", "dead_time",
+          "force_coupling_tau")  # fmt: skip
 
 
-@functools.lru_cache(maxsize=64)
-def plant(system: System) -> tuple[np.ndarray, np.ndarray, Layout]:
-    """Continuous ``A``, ``B`` of the plant; inputs: the N shaker forces (N), then the N current commands
-    (A). Read-only, made once per distinct system."""
+def _core_args(system: System) -> tuple[Mechanics, dict[str, Any]]:
+    """The structure and the core's arguments for it: its matrices and each axis' chain as arrays (NaN where a
+    stage is ideal, where the transducer is DC coupled)."""
     mech, axes = system.mechanics(), tuple(system.axes)
     N = mech.axes
     require(len(axes) == N, "axes", len(axes), f"{N} (one chain per controlled axis)")
     require(mech.coordinates >= N, "structure", f"{mech.coordinates} coordinates", f">= {N} (its axes)")
-    lay = _layout(mech, axes)
-    n = len(lay.names)
-    A, B = np.zeros((n, n)), np.zeros((n, 2 * N))
-    act = mech.actuators
-    mass = mech.mass + act.T @ np.diag([a.mass_loading for a in axes]) @ act
-    stiffness = mech.stiffness + act.T @ np.diag([a.kyy for a in axes]) @ act
+    chains = np.array([[getattr(a, name) for a in axes] for name in _CHAIN], dtype=float)  # None -> NaN
+    structure = {name: getattr(mech, name) for name in _STRUCTURE}
+    # A flexible structure's own elastic stiffness and damping act beside its process.
     if mech.elastic is not None:
-        stiffness = stiffness + mech.elastic
-    damping = mech.damping + mech.speed * mech.gyroscopic
+        structure["stiffness"] = mech.stiffness + mech.elastic
     if mech.elastic_damping is not None:
-        damping = damping + mech.elastic_damping
-    inverse = np.linalg.inv(mass)
-    pos, vel = list(lay.position), list(lay.velocity)
-    A[pos, vel] = 1.0
-    A[np.ix_(vel, pos)] = -inverse @ stiffness
-    A[np.ix_(vel, vel)] = -inverse @ damping
-    forcing = inverse @ act.T  # (n, N): a unit force at each axis' bearing plane
-    B[vel, :N] = forcing
-    for j, axis in enumerate(axes):
-        # The magnet's force -kiy i_f, from the eddy stage, the coil or the command itself.
-        source = lay.eddy[j] if lay.eddy[j] >= 0 else lay.coil[j]
-        if source >= 0:
-            A[vel, source] += -axis.kiy * forcing[:, j]
-        else:
-            B[vel, N + j] += -axis.kiy * forcing[:, j]
-        # Each first-order stage relaxes to its input at w = 2 pi * bandwidth.
-        if lay.coil[j] >= 0:
-            w = 2 * np.pi * float(axis.amp_bandwidth or 0.0)
-            A[lay.coil[j], lay.coil[j]] = -w
-            B[lay.coil[j], N + j] = w
-        if lay.eddy[j] >= 0:
-            w = 2 * np.pi * float(axis.eddy_bandwidth or 0.0)
-            A[lay.eddy[j], lay.eddy[j]] = -w
-            if lay.coil[j] >= 0:
-                A[lay.eddy[j], lay.coil[j]] = w
-            else:
-                B[lay.eddy[j], N + j] = w
-        if lay.sensor[j] >= 0:
-            w = 2 * np.pi * float(axis.sensor_bandwidth or 0.0)
-            A[lay.sensor[j], lay.sensor[j]] = -w
-            A[lay.sensor[j], pos] += w * mech.probes[j]
-    A.flags.writeable = B.flags.writeable = False
-    return A, B, lay
+        structure["damping"] = mech.damping + mech.elastic_damping
+    return mech, {**structure, **dict(zip(_CHAIN, chains))}
+
+
+_STRUCTURE = ("mass", "gyroscopic", "stiffness", "damping", "actuators", "probes", "speed")
+
+
+def _names(mech: Mechanics, parts: dict[str, Any]) -> tuple[Layout, tuple[str, ...]]:
+    """The plant's layout (from the core's indices) and the names of the axes' command lines."""
+    return _named(mech.coordinate_names, mech.names, *(parts[key] for key in _LAYOUT), parts.get("lines", ()))
+
+
+_LAYOUT = ("position", "velocity", "coil", "eddy", "sensor")
+
+
+@functools.lru_cache(maxsize=256)
+def _named(
+    coordinates: tuple[str, ...], axes: tuple[str, ...], *indices: tuple[int, ...]
+) -> tuple[Layout, tuple[str, ...]]:
+    *stages, lines = indices
+    names = [""] * sum(i >= 0 for at in stages for i in at)
+    for k, coordinate in enumerate(coordinates):
+        names[stages[0][k]], names[stages[1][k]] = coordinate, f"{coordinate}'"
+    for stage, at in zip(("i", "i_f", "ys"), stages[2:]):
+        for label, i in zip(axes, at):
+            if i >= 0:
+                names[i] = f"{label}.{stage}"
+    dead = tuple(f"{label}.dead{j + 1}" for label, line in zip(axes, lines) for j in range(line))
+    position, velocity, coil, eddy, sensor = stages
+    return Layout(position, velocity, coil, eddy, sensor, tuple(names)), dead
+
+
+def _read_only(*arrays: np.ndarray) -> None:
+    for a in arrays:
+        a.flags.writeable = False
+
+
+@functools.lru_cache(maxsize=64)
+def _plant(system: System) -> tuple[np.ndarray, np.ndarray, np.ndarray, Layout]:
+    mech, args = _core_args(system)
+    parts = _core.nd_loop(**args)
+    _read_only(parts["A"], parts["B"], parts["S"])
+    return parts["A"], parts["B"], parts["S"], _names(mech, parts)[0]
+
+
+def plant(system: System) -> tuple[np.ndarray, np.ndarray, Layout]:
+    """Continuous ``A``, ``B`` of the plant; inputs: the N shaker forces (N), then the N current commands
+    (A). Read-only, made once per distinct system (by the core: :func:`amb_fast._core.nd_loop`)."""
+    A, B, _, layout = _plant(system)
+    return A, B, layout
 
 
 def sensor_rows(system: System) -> np.ndarray:
     """(N, plant states): what the N probes read, before noise (their lag's output, or the structure)."""
-    mech = system.mechanics()
-    _, _, lay = plant(system)
-    S = np.zeros((mech.axes, len(lay.names)))
-    for j in range(mech.axes):
-        if lay.sensor[j] >= 0:
-            S[j, lay.sensor[j]] = 1.0
-        else:
-            S[j, list(lay.position)] = mech.probes[j]
-    return S
+    return _plant(system)[2]
 
 
 @functools.lru_cache(maxsize=64)
@@ -156,30 +144,11 @@ def discrete_plant(system: System, fs: float) -> tuple[np.ndarray, np.ndarray, t
     ``delta > 0``): ``x[k+1] = Phi x + Gf f + G0 u[k-m] + G1 u[k-m-1]`` per command column, with
     ``G0 = Gamma_u(T - delta)``, ``G1 = Phi(T - delta) Gamma_u(delta)``. Read-only.
     """
-    A, B, lay = plant(system)
-    N = B.shape[1] // 2
-    T = 1.0 / fs
-    Phi, Gamma = zoh(A, B, T)
-    n = A.shape[0]
-    splits = [split_dead_time(axis.dead_time, fs) for axis in system.axes]
-    lines = [s + (f > 0) for s, f in splits]
-    size = n + sum(lines)
-    Phi2, Gamma2 = np.zeros((size, size)), np.zeros((size, 2 * N))
-    Phi2[:n, :n] = Phi
-    Gamma2[:n, :N] = Gamma[:, :N]
-    names = list(lay.names)
-    at = n
-    labels = system.mechanics().names
-    for a, (split, line) in enumerate(zip(splits, lines)):
-        col = N + a
-        Gamma2[:n, col], Phi2[:n, at : at + line] = dead_time_columns(A, B, Gamma, col, T, split)
-        if line:
-            Gamma2[at, col] = 1.0  # <axis>.dead1' = u
-            Phi2[at : at + line, at : at + line] = np.eye(line, k=-1)  # <axis>.dead(j+1)' = <axis>.dead(j)
-        names += [f"{labels[a]}.dead{j + 1}" for j in range(line)]
-        at += line
-    Phi2.flags.writeable = Gamma2.flags.writeable = False
-    return Phi2, Gamma2, tuple(names)
+    mech, args = _core_args(system)
+    parts = _core.nd_loop(**args, fs=float(fs))
+    _read_only(parts["Phi"], parts["Gamma"])
+    layout, lines = _names(mech, parts)
+    return parts["Phi"], parts["Gamma"], layout.names + lines
 
 
 @dataclass(frozen=True, eq=False)
@@ -201,36 +170,33 @@ class LoopModel(ArrayRecord):
     poles: np.ndarray
 
 
+def _loop_args(system: System, controller: ControllerMatrix) -> tuple[Mechanics, dict[str, Any]]:
+    mech, args = _core_args(system)
+    Ac, Bc, Cc, Dc = controller_state_space(controller)
+    return mech, {**args, "fs": controller.fs, "Ac": Ac, "Bc": Bc, "Cc": Cc, "Dc": Dc}
+
+
+def _loop_of(mech: Mechanics, controller: ControllerMatrix, parts: dict[str, Any]) -> LoopModel:
+    layout, lines = _names(mech, parts)
+    names = [*layout.names, *lines] + [f"controller{j}" for j in range(parts["M"].shape[0] - parts["Phi"].shape[0])]
+    return LoopModel(
+        parts["M"], parts["Bf"], parts["Bn"], parts["C"], parts["Dn"], names, controller.fs, parts["poles"]
+    )
+
+
 @functools.lru_cache(maxsize=64)
 def _loop_model(system: System, controller: ControllerMatrix) -> LoopModel:
-    fs = controller.fs
-    N = controller.size
-    Phi, Gamma, states = discrete_plant(system, fs)
-    Ac, Bc, Cc, Dc = controller_state_space(controller)
-    n, m = Phi.shape[0], Ac.shape[0]
-    S = np.zeros((N, n))
-    S[:, : plant(system)[0].shape[0]] = sensor_rows(system)
-    Gf, Gu = Gamma[:, :N], Gamma[:, N:]
-    M = loop_matrix(Phi, Gu, S, Ac, Bc, Cc, Dc)
-    Bf = np.vstack([Gf, np.zeros((m, N))])
-    Bn = np.vstack([Gu @ Dc, Bc])
-    command, command_noise = np.hstack([Dc @ S, Cc]), Dc
-    C, Dn = np.zeros((2 * N, n + m)), np.zeros((2 * N, N))
-    C[:N, :n] = S
-    Dn[:N] = np.eye(N)
-    _, _, lay = plant(system)
-    for a, axis in enumerate(system.axes):
-        whole = split_dead_time(axis.dead_time, fs)[0]
-        if lay.coil[a] >= 0:
-            C[N + a, lay.coil[a]] = 1.0
-        elif whole > 0:
-            C[N + a, states.index(f"{system.mechanics().names[a]}.dead{whole}")] = 1.0
-        else:
-            C[N + a], Dn[N + a] = command[a], command_noise[a]
-    poles = np.array([0.0 if r.force_coupling_tau is None else np.exp(-1.0 / (fs * r.force_coupling_tau))
-                      for r in system.axes])  # fmt: skip
-    names = list(states) + [f"controller{j}" for j in range(m)]
-    return LoopModel(M, Bf, Bn, C, Dn, names, fs, poles)
+    mech, args = _loop_args(system, controller)
+    return _loop_of(mech, controller, _core.nd_loop(**args))
+
+
+def loop_models(points: Sequence[tuple[System, ControllerSpec]], workers: int = 1) -> list[LoopModel]:
+    """The closed loops of many ``(system, controller)`` points (a sweep's), assembled in one call of the core
+    on ``workers`` threads (the GIL released): each equal to :func:`loop_model`'s for that point."""
+    specs = [(system, controller_matrix(c, len(system.axes))) for system, c in points]
+    given = [_loop_args(system, spec) for system, spec in specs]
+    parts = _core.nd_loops([args for _, args in given], integer("workers", workers, 1))
+    return [_loop_of(mech, spec, p) for (mech, _), (_, spec), p in zip(given, specs, parts)]
 
 
 def loop_model(system: System, controller: ControllerSpec) -> LoopModel:
@@ -308,9 +274,7 @@ def sensitivity(
     f = frequencies(freq, model.fs)
     z = np.exp(2j * np.pi * f / model.fs)
     Phi, Gamma, _ = discrete_plant(system, model.fs)
-    S = np.zeros((N, Phi.shape[0]))
-    S[:, : plant(system)[0].shape[0]] = sensor_rows(system)
-    P = state_response(Phi, Gamma[:, N:], S, z, frequency_first=True)
+    P = state_response(Phi, Gamma[:, N:], model.C[:N, : Phi.shape[0]], z, frequency_first=True)  # probe rows
     K = controller_frequency_response(controller, N, z)
     return np.linalg.inv(np.eye(N) - (K @ P if at == "controller" else P @ K))
 
