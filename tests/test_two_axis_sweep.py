@@ -118,3 +118,19 @@ def test_each_point_loop_is_built_once() -> None:
                       kyx=-kxy, periods=2, seed=1, progress=False)  # fmt: skip
     assert result.stable.all()
     assert _model._loop_model.cache_info().misses == kxy.size
+
+
+def test_a_stable_point_whose_spectra_overflow_is_flagged_not_fatal() -> None:
+    """A point within rounding of |z| = 1 (radius 1 - 3e-15) passed the stability test and then its stationary
+    state overflowed in the core: the whole batched sweep raised OverflowError and lost every point. Now the
+    points run one by one after such a failure, the failing one is stable with NaN rows and status "overflow"."""
+    from dataclasses import replace as swap
+
+    coupled = ta.TwoAxisRig(x=af.Rig.paper(), y=af.Rig.paper(), kxy=5e3, kyx=-5e3, sensor_angle=0.05)
+    sphs = af.schroeder_multisine(f0=20.0, f_max=100.0)
+    result = ta.sweep(coupled, af.PID.paper(), sphs, kp=[3000.0, 3500.0], periods=2, seed=1, progress=False)
+    assert result.status.tolist() == ["ok", "ok"]
+    k = result.k.copy()
+    k[1] = np.nan
+    assert swap(result, k=k).status.tolist() == ["ok", "overflow"]
+    assert swap(result, stable=np.array([True, False])).status.tolist() == ["ok", "unstable"]

@@ -190,8 +190,10 @@ def _param_unit(path: str) -> str:
 
 
 def sweep_status(result: SweepResultN) -> np.ndarray:
-    """Per point: ``"ok"``, or ``"unstable"`` (not run)."""
-    return np.where(result.stable, "ok", "unstable")
+    """Per point: ``"ok"``; ``"unstable"`` (not run); ``"overflow"`` (stable, but its line spectra overflowed:
+    a pole within rounding of the unit circle, whose stationary state cannot be computed; rows NaN)."""
+    ran = np.isfinite(result.k).any(axis=tuple(range(1, result.k.ndim)))
+    return np.where(~result.stable, "unstable", np.where(ran, "ok", "overflow"))
 
 
 def sweep_to_xarray(result: SweepResultN):  # noqa: ANN201 - xarray is optional

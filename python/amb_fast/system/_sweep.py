@@ -206,15 +206,18 @@ def sweep(
     def model(i: int) -> tuple[Any, ControllerMatrix]:
         return point_model(rig, controller, {n: float(v[i]) for n, v in points.items()})
 
-    def point(i: int) -> EstimateN | None:
+    def point(i: int) -> EstimateN | None | bool:
         try:
             return run_experiment(*model(i), excitation, seed=int(seeds[i]), **options)  # type: ignore[arg-type]
         except UnstableLoopError:
             return None
+        except OverflowError:  # stable, but its spectra overflowed (a pole within rounding of |z| = 1)
+            return True
 
-    def keep(i: int, values: tuple[np.ndarray, ...]) -> None:
-        stable[i] = True
-        k[i], c[i], k_std[i], c_std[i], receptance[i] = values
+    def keep(i: int, values: tuple[np.ndarray, ...] | None) -> None:
+        stable[i] = True  # its poles are inside the unit circle; None: its spectra overflowed (rows stay NaN)
+        if values is not None:
+            k[i], c[i], k_std[i], c_std[i], receptance[i] = values
 
     bar = _progress_bar(progress, count)
     try:
@@ -231,8 +234,10 @@ def sweep(
             pool = ThreadPoolExecutor(threads) if executor is None else executor
             try:
                 for i, est in enumerate(pool.map(point, range(count))):
-                    if est is not None:
+                    if isinstance(est, EstimateN):
                         keep(i, (est.k, est.c, est.k_std, est.c_std, est.receptance))
+                    elif est:
+                        keep(i, None)
                     if bar is not None:
                         bar.update(1)
             finally:
@@ -247,10 +252,10 @@ def sweep(
 def _core_sweep(
     models: list[tuple[Any, ControllerMatrix]], excitation: Multisine, settle_periods: int | None, seeds: np.ndarray,
     start: str, periods: int, workers: int,
-) -> Iterator[tuple[int, tuple[np.ndarray, ...]]]:  # fmt: skip
+) -> Iterator[tuple[int, tuple[np.ndarray, ...] | None]]:  # fmt: skip
     """Two-axis points in one call of the core on ``workers`` threads: each stable point's index and its
     (k, c, k_std, c_std, receptance) as :func:`run_experiment` makes them, bit for bit (an unstable point
-    is not run). The loops are built here, each once (a call's points outnumber loop_model's cache); their
+    is not run; None for a point whose spectra overflowed). The loops are built here, each once (a call's points outnumber loop_model's cache); their
     poles come from the core in a stack per loop size, the numbers with which run_experiment checks one."""
     loops = [loop_model(*m) for m in models]
     poles: list[np.ndarray] = [np.empty(0)] * len(models)
@@ -273,11 +278,24 @@ def _core_sweep(
         given.append((j, system, core_args(loop, system, outputs=2), settle, experiment_seeds(int(seed), 2)))
     if not given:
         return
-    args: dict[str, Any] = {name: [g[2][name] for g in given] for name in given[0][2]}  # a list per matrix
-    H, receptance, var_re, var_im = _core.mimo_line_sweep(
-        **args, period_forces=experiment_forces(excitation, 2), settle_periods=[g[3] for g in given], periods=periods,
-        seeds=np.array([g[4] for g in given], dtype=np.uint64), steady_start=start == "steady",
-        bins=excitation.harmonics, workers=workers)  # fmt: skip
     freq = excitation.harmonics * excitation.f0  # as run_experiment computes them, to the bit
-    for at, (j, system, *_) in enumerate(given):
-        yield j, (*coefficients(H[at], var_re[at], var_im[at], freq, system.mechanics()), receptance[at])
+
+    def run(part: list) -> tuple[np.ndarray, ...]:
+        args: dict[str, Any] = {name: [g[2][name] for g in part] for name in part[0][2]}  # a list per matrix
+        return _core.mimo_line_sweep(
+            **args, period_forces=experiment_forces(excitation, 2), settle_periods=[g[3] for g in part],
+            periods=periods, seeds=np.array([g[4] for g in part], dtype=np.uint64), steady_start=start == "steady",
+            bins=excitation.harmonics, workers=workers)  # fmt: skip
+
+    try:
+        results = [(given, run(given))]
+    except OverflowError:  # a point within rounding of |z| = 1: run them one by one, and flag that one
+        results = []
+        for g in given:
+            try:
+                results.append(([g], run([g])))
+            except OverflowError:
+                yield g[0], None
+    for part, (H, receptance, var_re, var_im) in results:
+        for at, (j, system, *_) in enumerate(part):
+            yield j, (*coefficients(H[at], var_re[at], var_im[at], freq, system.mechanics()), receptance[at])
