@@ -134,3 +134,24 @@ def test_a_stable_point_whose_spectra_overflow_is_flagged_not_fatal() -> None:
     k[1] = np.nan
     assert swap(result, k=k).status.tolist() == ["ok", "overflow"]
     assert swap(result, stable=np.array([True, False])).status.tolist() == ["ok", "unstable"]
+
+
+def test_the_batch_falls_back_to_single_points_on_overflow(monkeypatch: pytest.MonkeyPatch) -> None:
+    from amb_fast import _core
+
+    real, calls = _core.mimo_line_sweep, []
+
+    def failing(**kwargs):  # noqa: ANN003, ANN202 - the core's signature
+        calls.append(len(kwargs["seeds"]))
+        if len(kwargs["seeds"]) > 1 or len(calls) == 3:  # the batch, then the second point alone
+            raise OverflowError("the line spectra became non-finite")
+        return real(**kwargs)
+
+    coupled = ta.TwoAxisRig(x=af.Rig.paper(), y=af.Rig.paper(), kxy=5e3, kyx=-5e3)
+    sphs = af.schroeder_multisine(f0=20.0, f_max=100.0)
+    expected = ta.sweep(coupled, af.PID.paper(), sphs, kp=[3000.0, 3500.0], periods=2, seed=1, progress=False)
+    monkeypatch.setattr(_core, "mimo_line_sweep", failing)
+    result = ta.sweep(coupled, af.PID.paper(), sphs, kp=[3000.0, 3500.0], periods=2, seed=1, progress=False)
+    assert calls == [2, 1, 1] and result.status.tolist() == ["ok", "overflow"] and result.stable.all()
+    np.testing.assert_array_equal(result.k[0], expected.k[0])
+    assert np.isnan(result.k[1]).all()
