@@ -261,11 +261,12 @@ def _check(
             tags += [f"axis {est.axes[i]}"] * (len(caught) - len(tags))
     seen: set[str] = set()
     for where, w in zip(tags, caught):
-        kind = f"{w.category.__name__}{str(w.message)[:30]}"
+        kind = f"{w.category.__name__} {str(w.message).split()[:3]}"  # the check, not its numbers
         if kind not in seen:  # once per kind: the first experiment and axis that showed it
             seen.add(kind)
-            args = w.message.args
-            warnings.warn(w.category(f"{where}: {args[0]}", *args[1:]), stacklevel=3)
+            message = w.message  # keeps its attributes (fraction, weak lines, factor)
+            message.args = (f"{where}: {message.args[0]}", *message.args[1:])
+            warnings.warn(message, stacklevel=3)
 
 
 def _line_levels(x: np.ndarray, period: int, harmonics: np.ndarray, gaps: np.ndarray, others: np.ndarray | None,
