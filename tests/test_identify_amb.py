@@ -9,10 +9,8 @@ import numpy as np
 import pytest
 
 import amb_fast as af
-from amb_fast import _core, system
-from amb_fast.system._exciter import amb_args, current_rows
+from amb_fast import system
 from amb_fast.system._experiment import experiment_seeds
-from amb_fast.system._model import loop_model
 
 SPHS = af.schroeder_multisine(f0=20.0, f_max=200.0)
 PID = af.RotorRig.example_controller()
@@ -24,18 +22,11 @@ def _quiet(rig: af.RotorRig, **changes: object) -> af.RotorRig:
 
 
 def _amb_recordings(rig: af.RotorRig, periods: int, seeds: list[int]) -> tuple[np.ndarray, np.ndarray]:
-    """Every experiment simulated from rest with the Hadamard-signed multisine on the current commands, as the
-    core runs run_experiment(exciter="amb"): the coil currents (A, the injection included where the current is
-    the command itself) and the probes (m), (N, samples, N) each."""
-    model = loop_model(rig, PID)
-    direct = current_rows(rig, SPHS.fs)[1]
-    currents, probes = [], []
-    for row, seed in zip(system.hadamard_signs(4), seeds):
-        injection = np.ascontiguousarray(np.tile(SPHS.samples, periods)[:, None] * row[None, :])
-        _, out = _core.mimo_simulate(**amb_args(model, rig), force=injection, seed=seed)
-        currents.append(out[:, 4:8] + direct * injection)
-        probes.append(out[:, :4])
-    return np.array(currents), np.array(probes)
+    """Every experiment simulated from rest with the Hadamard-signed multisine on the current commands: the
+    coil currents (A) and the probes (m), (N, samples, N) each."""
+    traces = [system.simulate(rig, PID, np.tile(SPHS.samples, periods)[:, None] * row[None, :], seed=s, exciter="amb")
+              for row, s in zip(system.hadamard_signs(4), seeds)]  # fmt: skip
+    return np.array([t.current for t in traces]), np.array([t.displacement for t in traces])
 
 
 def _assert_same(est: system.EstimateN, ref: system.EstimateN, tol: float = 1e-9) -> None:
@@ -164,3 +155,16 @@ def test_a_noisy_current_warns_in_amperes() -> None:
     noise = np.random.default_rng(4).normal(0.0, 1e-6, probes.shape)
     with pytest.warns(af.WeakLinesWarning, match=r"their current or displacement .*\(current [0-9.e-]+ A, "):
         system.identify(current=current, displacement=noise, fs=SPHS.fs, f0=SPHS.f0, rig=ROTOR, settle_periods=20)
+
+
+def test_simulate_with_the_bearings_as_exciters_records_the_injection() -> None:
+    """simulate(..., exciter="amb"): the columns are current (A) on the commands; TraceN.force is the injection
+    and, with an ideal amplifier and no dead time, the coil current is the command with the injection in it."""
+    rig = _quiet(ROTOR, amp_bandwidth=None, dead_time=0.0)
+    injection = np.tile(SPHS.samples, 2)[:, None] * system.hadamard_signs(4)[1]
+    trace = system.simulate(rig, PID, injection, exciter="amb")
+    assert np.array_equal(trace.force, injection)
+    shaken = system.simulate(rig, PID, injection)  # the same samples as forces: another loop input
+    assert np.max(np.abs(trace.current - shaken.current)) > 0.1 * np.max(np.abs(injection))
+    with pytest.raises(ValueError, match=r"exciter must be 'shaker' .* or 'amb' .*, got 'coil'"):
+        system.simulate(rig, PID, injection, exciter="coil")  # type: ignore[arg-type]
