@@ -82,16 +82,29 @@ ZEROS = np.zeros((4, 800, 4))
 @pytest.mark.parametrize(
     ("call", "message"),
     [
-        (lambda: system.identify(ZEROS, ZEROS, current=ZEROS, fs=4000.0, f0=20.0, rig=ROTOR),
-         r"force, current must be one of them: force= .shakers' forces, N. or current= .*got 'both'"),
+        (
+            lambda: system.identify(ZEROS, ZEROS, current=ZEROS, fs=4000.0, f0=20.0, rig=ROTOR),
+            r"force, current must be one of them: force= .shakers' forces, N. or current= .*got 'both'",
+        ),
         (lambda: system.identify(displacement=ZEROS, fs=4000.0, f0=20.0, rig=ROTOR), r"got 'neither'"),
-        (lambda: system.identify(current=ZEROS, displacement=ZEROS, fs=4000.0, f0=20.0, rig=ROTOR.rotor),
-         r"rig must be a RotorRig or TwoAxisRig with current=: its axes' kyy, kiy .*got 'RigidRotor'"),
-        (lambda: system.identify(current=ZEROS[:3], displacement=ZEROS[:3], fs=4000.0, f0=20.0, rig=ROTOR),
-         r"current shape must be \(4 experiments, samples, 4 axes: A.x, A.y, B.x, B.y\), got \(3, 800, 4\)"),
-        (lambda: system.identify(current=np.tile(np.sin(np.arange(800) * np.pi / 10)[None, :, None], (4, 1, 4)),
-                                 displacement=ZEROS, fs=4000.0, f0=20.0, rig=ROTOR),
-         r"current must tell the 4 axes apart at every line: the experiments' current matrix"),
+        (
+            lambda: system.identify(current=ZEROS, displacement=ZEROS, fs=4000.0, f0=20.0, rig=ROTOR.rotor),
+            r"rig must be a RotorRig or TwoAxisRig with current=: its axes' kyy, kiy .*got 'RigidRotor'",
+        ),
+        (
+            lambda: system.identify(current=ZEROS[:3], displacement=ZEROS[:3], fs=4000.0, f0=20.0, rig=ROTOR),
+            r"current shape must be \(4 experiments, samples, 4 axes: A.x, A.y, B.x, B.y\), got \(3, 800, 4\)",
+        ),
+        (
+            lambda: system.identify(
+                current=np.tile(np.sin(np.arange(800) * np.pi / 10)[None, :, None], (4, 1, 4)),
+                displacement=ZEROS,
+                fs=4000.0,
+                f0=20.0,
+                rig=ROTOR,
+            ),
+            r"current must tell the 4 axes apart at every line: the experiments' current matrix",
+        ),
     ],  # fmt: skip
 )
 def test_bad_input_is_refused_naming_the_parameter(call, message: str) -> None:  # noqa: ANN001

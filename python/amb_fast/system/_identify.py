@@ -156,8 +156,12 @@ def identify(
         (:class:`WeakLinesWarning`), a start transient and implausible magnitudes
         (:class:`IdentificationWarning`).
     """
-    require((force is None) != (current is None), "force, current", "both" if force is not None else "neither",
-            "one of them: force= (shakers' forces, N) or current= (the bearings as exciters: coil currents, A)")
+    require(
+        (force is None) != (current is None),
+        "force, current",
+        "both" if force is not None else "neither",
+        "one of them: force= (shakers' forces, N) or current= (the bearings as exciters: coil currents, A)",
+    )
     what = "force" if current is None else "current"
     mech, axes = _mechanics(rig), getattr(rig, "axes", None)
     names, N = mech.names, mech.axes
@@ -264,9 +268,9 @@ def _check(
         kind = f"{w.category.__name__} {str(w.message).split()[:3]}"  # the check, not its numbers
         if kind not in seen:  # once per kind: the first experiment and axis that showed it
             seen.add(kind)
-            message = w.message  # keeps its attributes (fraction, weak lines, factor)
-            message.args = (f"{where}: {message.args[0]}", *message.args[1:])
-            warnings.warn(message, stacklevel=3)
+            note = w.message if isinstance(w.message, Warning) else w.category(w.message)
+            note.args = (f"{where}: {note.args[0]}", *note.args[1:])  # keeps its attributes (fraction, ...)
+            warnings.warn(note, stacklevel=3)
 
 
 def _line_levels(x: np.ndarray, period: int, harmonics: np.ndarray, gaps: np.ndarray, others: np.ndarray | None,
