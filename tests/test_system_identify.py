@@ -129,11 +129,11 @@ def test_refusals_name_the_parameter(call, message: str) -> None:  # noqa: ANN00
 
 def test_non_finite_sample_is_named() -> None:
     F = np.tile(np.sin(np.arange(800) * np.pi / 10)[None, :, None], (4, 1, 4)) * system.hadamard_signs(4)[:, None, :]
-    Y = F * 1e-5
+    Y = F * 1e-7  # |F/Y| 1e7 N/m: above what moving the rotor takes (1e5 would warn: too light)
     Y[2, 500, 3] = np.nan
     with pytest.raises(ValueError, match=r"displacement must be finite, got nan in experiment 2, axis B.y, sample 500"):
         system.identify(F, Y, fs=4000.0, f0=20.0, rig=ROTOR)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        est = system.identify(F, F * 1e-5, fs=4000.0, f0=20.0, rig=ROTOR)  # the same without the NaN
+        est = system.identify(F, F * 1e-7, fs=4000.0, f0=20.0, rig=ROTOR)  # the same without the NaN
     assert est.freq.tolist() == [200.0]

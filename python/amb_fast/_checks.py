@@ -159,10 +159,10 @@ def non_periodic_fraction(spectra: np.ndarray, excited: np.ndarray) -> float:
     return (float(power[:, ~on].sum()) + deviation) / total
 
 
-def non_periodic_message(fraction: float, fs: float, f0: float, period: int, periods: int) -> str:
-    """What a non-periodic force means, naming fs, f0 and the measured share."""
+def non_periodic_message(fraction: float, fs: float, f0: float, period: int, periods: int, what: str = "force") -> str:
+    """What a non-periodic force (``what``: or the current driving it) means, naming fs, f0 and the measured share."""
     return (
-        f"the force does not repeat with the period fs/f0 = {period} samples (fs = {fs:g} Hz, f0 = {f0:g} Hz): "
+        f"the {what} does not repeat with the period fs/f0 = {period} samples (fs = {fs:g} Hz, f0 = {f0:g} Hz): "
         f"{fraction:.0%} of its power (in {periods} periods sampled) changes from period to period or falls "
         f"between the excited lines (a periodic excitation: under {NON_PERIODIC:.0%}). The estimate is then "
         "biased by leakage and its frequencies are wrong if fs or f0 is: check fs (the recording's sample rate) "
@@ -170,8 +170,10 @@ def non_periodic_message(fraction: float, fs: float, f0: float, period: int, per
     )
 
 
-def warn_short_period(excited: np.ndarray, fs: float, f0: float, period: int, stacklevel: int = 4) -> None:
-    """Warn (:class:`ShortPeriodWarning`) when the force excites 3 or more harmonics, all multiples of one
+def warn_short_period(
+    excited: np.ndarray, fs: float, f0: float, period: int, stacklevel: int = 4, what: str = "force"
+) -> None:
+    """Warn (:class:`ShortPeriodWarning`) when the force (``what``) excites 3 or more harmonics, all multiples of one
     g >= 2 (a single sine, a stepped sine's line, is left alone)."""
     if excited.size < 3:
         return
@@ -180,7 +182,7 @@ def warn_short_period(excited: np.ndarray, fs: float, f0: float, period: int, st
         return
     warnings.warn(
         ShortPeriodWarning(
-            f"every harmonic the force excites ({excited.size} of them) is a multiple of {factor}: it repeats every "
+            f"every harmonic the {what} excites ({excited.size} of them) is a multiple of {factor}: it repeats every "
             f"{period // factor} samples, 1/{factor} of fs/f0 = {period} samples (fs = {fs:g} Hz, f0 = {f0:g} Hz). "
             f"If fs is right, the excitation's f0 is {factor * f0:g} Hz and the estimate is right; if f0 is right, "
             f"fs is {fs / factor:g} Hz and the estimate's frequencies are {factor}x too high: check fs",
@@ -191,20 +193,25 @@ def warn_short_period(excited: np.ndarray, fs: float, f0: float, period: int, st
 
 
 def warn_mostly_weak(
-    weak: np.ndarray, force_noise: float | None, displacement_noise: float | None, stacklevel: int = 4
+    weak: np.ndarray,
+    force_noise: float | None,
+    displacement_noise: float | None,
+    stacklevel: int = 4,
+    what: tuple[str, str] = ("force", "N"),
 ) -> None:
-    """Warn (:class:`WeakLinesWarning`) when more than MOSTLY_WEAK of the lines are weak."""
+    """Warn (:class:`WeakLinesWarning`) when more than MOSTLY_WEAK of the lines are weak (``what``: the
+    driving channel's name and unit, the force in N or the coil current in A)."""
     count, lines = int(np.count_nonzero(weak)), int(np.size(weak))
     if lines == 0 or count <= MOSTLY_WEAK * lines:
         return
     levels = ", ".join(
         f"{name} {level:.3g} {unit}"
-        for name, level, unit in (("force", force_noise, "N"), ("displacement", displacement_noise, "m"))
+        for name, level, unit in ((what[0], force_noise, what[1]), ("displacement", displacement_noise, "m"))
         if level is not None
     )
     warnings.warn(
         WeakLinesWarning(
-            f"{count} of {lines} excited lines are weak: their force or displacement is under {WEAK:g}x the noise "
+            f"{count} of {lines} excited lines are weak: their {what[0]} or displacement is under {WEAK:g}x the noise "
             f"level ({levels}), so the estimate there is mostly noise (Estimate.weak flags them). Raise the "
             "excitation, average more periods, or check that the displacement is the response to this force",
             count,

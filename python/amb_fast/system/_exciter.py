@@ -90,16 +90,21 @@ def _chain(system: System) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return kyy, kiy, np.linalg.inv(mech.frame)
 
 
+def amb_force(system: System, probes: np.ndarray, current: np.ndarray) -> np.ndarray:
+    """The estimated forces' line spectra (N) from the probes' (m) and the coil currents' (A), each (periods,
+    lines, N, experiments): ``F = -kyy E^-1 readout y - kiy i``."""
+    kyy, kiy, inverse_frame = _chain(system)
+    d = np.tensordot(probes, (inverse_frame @ system.mechanics().readout).T, axes=(2, 0)).swapaxes(2, 3)  # one product
+    return np.ascontiguousarray(-kyy[:, None] * d - kiy[:, None] * current)
+
+
 def amb_lines(system: System, fs: float, injection: np.ndarray, outputs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The estimated forces' and the probes' line spectra (periods, lines, N, experiments) from the core's
-    injection and output (probes, then coil currents) lines: ``F = -kyy E^-1 readout y - kiy i``, N."""
+    injection and output (probes, then coil currents) lines (:func:`amb_force`)."""
     N = injection.shape[2]
-    kyy, kiy, inverse_frame = _chain(system)
     probes = outputs[:, :, :N]
     current = outputs[:, :, N:] + current_rows(system, fs)[1][:, None] * injection
-    d = np.tensordot(probes, (inverse_frame @ system.mechanics().readout).T, axes=(2, 0)).swapaxes(2, 3)  # one product
-    force = -kyy[:, None] * d - kiy[:, None] * current
-    return np.ascontiguousarray(force), np.ascontiguousarray(probes)
+    return amb_force(system, probes, current), np.ascontiguousarray(probes)
 
 
 def corrected_process(system: System, fs: float, freq: np.ndarray, H: np.ndarray) -> np.ndarray:

@@ -31,7 +31,7 @@ from .._validate import integer, require, seed_value
 from ..plots import plot_coefficients_n
 from . import _results
 from ._control import ControllerSpec, controller_matrix
-from ._exciter import amb_args, amb_lines, corrected_process
+from ._exciter import amb_args, amb_lines, corrected_process, current_rows
 from ._model import LoopModel, System, known_dynamics, loop_model, require_stable
 from ._unbalance import with_unbalance
 
@@ -88,24 +88,32 @@ def core_args(model: LoopModel, system: System, outputs: int | None = None) -> d
 
 
 def simulate(
-    system: System, controller: ControllerSpec, force: ArrayLike, *, seed: int | None = None, unbalance: Any = None
-) -> TraceN:
+    system: System, controller: ControllerSpec, force: ArrayLike, *, seed: int | None = None, unbalance: Any = None,
+    exciter: Literal["shaker", "amb"] = "shaker",
+) -> TraceN:  # fmt: skip
     """Run the closed loop of N axes from rest on forces (n, N) (N, one column per axis' shaker) at the
     controller's ``fs``: zero-order held, the loop discretised exactly; ``seed`` fixes the noise.
 
     A rotor may carry ``unbalance=[(m_e, z, phase), ...]`` (kg m, m, rad; as :func:`unbalance_response`)
     at its constant speed ``W``: the force ``m_e W^2`` rotating from ``phase`` at ``t = 0``, continuous in
-    time (not held), exact at the samples; the recorded forces stay the shakers'."""
+    time (not held), exact at the samples; the recorded forces stay the shakers'.
+
+    ``exciter="amb"``: ``force`` is read as current (A) added to each axis' current command, as
+    ``run_experiment(..., exciter="amb")`` does; ``TraceN.force`` is then that injection and ``current`` the
+    coil currents it is in (no unbalance with it yet)."""
+    require(exciter in ("shaker", "amb"), "exciter", exciter, "'shaker' (the shakers' forces) or 'amb' (the bearings)")
+    require(unbalance is None or exciter == "shaker", "unbalance", unbalance, "None with exciter='amb' (not yet)")
     model = loop_model(system, controller)
     N = model.Bf.shape[1]
     array = np.ascontiguousarray(force, dtype=np.float64)
     names = system.mechanics().names
     require(array.ndim == 2 and array.shape[1] == N, "force shape", array.shape, f"(samples, {N}): columns {names}")
-    args = core_args(model, system)
+    args = core_args(model, system) if exciter == "shaker" else amb_args(model, system)
     if unbalance is not None:
         args, array = with_unbalance(system, controller, args, array, unbalance)
     recorded, out = _core.mimo_simulate(**args, force=array, seed=seed_value(seed))
-    return TraceN(force=recorded[:, :N], displacement=out[:, :N], current=out[:, N:], fs=model.fs, axes=names)
+    current = out[:, N : 2 * N] + (current_rows(system, model.fs)[1] * array if exciter == "amb" else 0.0)
+    return TraceN(force=recorded[:, :N], displacement=out[:, :N], current=current, fs=model.fs, axes=names)
 
 
 @dataclass(frozen=True, eq=False)

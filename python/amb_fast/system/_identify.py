@@ -6,19 +6,26 @@ The recordings' per-period line spectra go to the estimator :func:`run_experimen
 
 from __future__ import annotations
 
+import re
 import warnings
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._errors import IdentificationWarning
+from .. import _checks
+from .._errors import IdentificationWarning, NonPeriodicExcitationWarning
 from .._excitation import period_samples
 from .._experiment import _lines
 from .._mechanics import Mechanics
+from .._params import Rig
 from .._validate import integer, real, require
+from ..io._channels import UNITS, split_unit
 from ..io._recording import Recording
+from ._exciter import amb_force, corrected_process
 from ._experiment import EstimateN, estimate
+from ._model import known_dynamics
 
 #: Largest condition number of the experiments' force matrix at a line: beyond it the N experiments do not
 #: tell the N axes apart there (Hadamard signs give 1).
@@ -33,12 +40,13 @@ def _mechanics(rig: Any) -> Mechanics:  # noqa: ANN401 - any structure with mech
     return mech
 
 
-def _from_recordings(recordings: Any, names: tuple[str, ...], fs: float | None) -> tuple[list, list, float]:  # noqa: ANN401
-    """Per experiment (samples, N) forces and displacements from N experiments of N Recordings each, and fs."""
+def _from_recordings(recordings: Any, names: tuple[str, ...], fs: float | None, what: str) -> tuple[list, list, float]:  # noqa: ANN401, E501
+    """Per experiment (samples, N) forces (or currents: ``what``) and displacements from N experiments of N
+    Recordings each, and fs."""
     N, axes = len(names), ", ".join(names)
     count = len(recordings) if isinstance(recordings, (list, tuple)) else None
     require(count == N, "recordings", f"{count} experiments" if count is not None else type(recordings).__name__,
-            f"{N} experiments (one per axis), each a list of {N} Recordings (axes {axes}); or force and "
+            f"{N} experiments (one per axis), each a list of {N} Recordings (axes {axes}); or {what} and "
             "displacement arrays")  # fmt: skip
     for e, experiment in enumerate(recordings):
         listed = isinstance(experiment, (list, tuple))
@@ -53,12 +61,26 @@ def _from_recordings(recordings: Any, names: tuple[str, ...], fs: float | None) 
             size = experiment[0].force.size
             require(rec.force.size == size, f"recordings[{e}][{j}] length", rec.force.size,
                     f"{size} samples like recordings[{e}][0] (one acquisition per experiment)")  # fmt: skip
+            if what == "current":  # a Recording's "force" channel holds the current: refuse one loaded in N
+                require(not _force_channel(rec.source), f"recordings[{e}][{j}]",
+                        rec.source, "a coil current (A) in its force channel, not a force: give the recordings of "
+                        "shakers as force=")  # fmt: skip
     forces = [np.column_stack([r.force for r in experiment]) for experiment in recordings]
     displacements = [np.column_stack([r.displacement for r in experiment]) for experiment in recordings]
     if fs is not None:
         fs = real("fs", fs, "Hz", positive=True)
         require(abs(fs - first.fs) <= 1e-3 * first.fs, "fs", fs, f"the recordings' {first.fs_note()} within 0.1 %")
     return forces, displacements, first.fs if fs is None else fs
+
+
+def _force_channel(source: str) -> bool:
+    """Whether a loaded Recording's force channel (its ``source``: ``"rig.csv: force 'F [kN]' (kN -> N), ..."``)
+    is named a force or has a force's unit."""
+    match = re.search(r": force '(.*?)'(?: \(|, displacement)", source)
+    if match is None:
+        return False
+    name, unit = split_unit(match.group(1))
+    return "force" in name.lower() or UNITS.get((unit or "").lower(), ("",))[0] == "force"
 
 
 def _spectra(x: np.ndarray, harmonics: np.ndarray, period: int) -> np.ndarray:
@@ -70,9 +92,10 @@ def _spectra(x: np.ndarray, harmonics: np.ndarray, period: int) -> np.ndarray:
 
 
 def identify(
-    force: ArrayLike | Any,  # noqa: ANN401 - arrays or nested Recordings
+    force: ArrayLike | Any = None,  # noqa: ANN401 - arrays or nested Recordings
     displacement: ArrayLike | None = None,
     *,
+    current: ArrayLike | Any = None,  # noqa: ANN401 - arrays or nested Recordings
     f0: float,
     rig: Any,  # noqa: ANN401 - anything with mechanics()
     fs: float | None = None,
@@ -83,11 +106,14 @@ def identify(
 ) -> EstimateN:
     """The N x N estimate from the recordings of a real structure's N experiments (a rotor's four).
 
-    Experiment ``e`` drives axis ``j``'s shaker with ``signs[e, j]`` times one periodic multisine
-    (``signs = hadamard_signs(N)``, as :func:`run_experiment` does; any signs or shakers whose force matrices
-    are invertible at every line will do). The estimate is :func:`run_experiment`'s: ``H = F Y^-1`` per line,
-    the displacements moved to the bearing planes by the structure's ``readout``, its mass and gyroscopic
-    matrices removed from ``k``, ``c``.
+    Experiment ``e`` drives axis ``j``'s shaker (``force=``) or current command (``current=``, the bearings as
+    exciters) with ``signs[e, j]`` times one periodic multisine (``signs = hadamard_signs(N)``, as
+    :func:`run_experiment` does; any signs whose force or current matrices are invertible at every line will
+    do). The estimate is :func:`run_experiment`'s: ``H = F Y^-1`` per line, the displacements moved to the
+    bearing planes by the structure's ``readout``, its mass and gyroscopic matrices removed from ``k``, ``c``.
+    With ``current=`` the force is estimated per line from the coil current and the probes by the rig's
+    actuator model, ``F = -kyy d - kiy i``, and ``EstimateN.process`` is the process at the bearings with the
+    hold and the known lags removed, as ``run_experiment(..., exciter="amb")`` gives them.
 
     Parameters
     ----------
@@ -97,16 +123,21 @@ def identify(
         ``force`` alone: the recordings, a list of N experiments each a list of N :class:`~amb_fast.Recording`
         (one per axis, its force and displacement channels; :func:`~amb_fast.load_recording`), ``fs``
         then from them; experiments of different lengths are cut to the shortest.
+    current : array_like, optional
+        Instead of ``force``: the coil currents (A, the amplifiers' outputs as recorded, injection included),
+        the same shapes; or the recordings, each :class:`~amb_fast.Recording`'s force channel holding the
+        current (one named a force or in N, kN, mN is refused). Needs ``rig`` with its axes (kyy, kiy, lags).
     f0 : float
         The multisine's line spacing, Hz (``fs / f0`` samples a period).
     rig : RotorRig, RigidRotor, TwoAxisRig or Mechanics
         The structure: the ``readout`` from the probes to the bearing planes, the mass and gyroscopic matrices
-        removed (a rotor at its ``speed``: ``rig.at_speed(speed)`` for recordings at speed).
+        removed (a rotor at its ``speed``: ``rig.at_speed(speed)`` for recordings at speed). With ``current``
+        a RotorRig or TwoAxisRig: its axes' actuator model estimates the force and corrects the process.
     fs : float, optional
         Sampling frequency, Hz: needed with arrays; with recordings it must agree with theirs within 0.1 %.
     f_max, lines : optional
         The lines, as in :func:`amb_fast.identify`; by default the harmonics the first experiment's first
-        axis' force excites.
+        axis' force (or current) excites.
     settle_periods : int
         Periods skipped at the start of every experiment.
     median_window : int
@@ -117,19 +148,36 @@ def identify(
     EstimateN
         As :func:`run_experiment` returns it. Trailing samples short of a whole period are dropped with an
         :class:`~amb_fast.IdentificationWarning`. A ``ValueError`` names the parameter for a wrong shape,
-        number of experiments, non-finite sample, or force matrices that do not tell the axes apart (a
-        condition number above 1e6 at a line: the same signs twice, an axis not driven).
+        number of experiments, non-finite sample, or force (current) matrices that do not tell the axes apart
+        (a condition number above 1e6 at a line: the same signs twice, an axis not driven). Every experiment's
+        every axis gets :func:`amb_fast.identify`'s checks, each warning naming the first experiment and axis it
+        found: a force (current) that does not repeat with ``fs/f0`` (:class:`NonPeriodicExcitationWarning`) or
+        repeats with a fraction of it (:class:`ShortPeriodWarning`), more than half the lines weak
+        (:class:`WeakLinesWarning`), a start transient and implausible magnitudes
+        (:class:`IdentificationWarning`).
     """
-    mech = _mechanics(rig)
+    require(
+        (force is None) != (current is None),
+        "force, current",
+        "both" if force is not None else "neither",
+        "one of them: force= (shakers' forces, N) or current= (the bearings as exciters: coil currents, A)",
+    )
+    what = "force" if current is None else "current"
+    mech, axes = _mechanics(rig), getattr(rig, "axes", None)
     names, N = mech.names, mech.axes
+    if what == "current":
+        require(isinstance(axes, (tuple, list)) and len(axes) == N and all(isinstance(a, Rig) for a in axes), "rig",
+                type(rig).__name__, "a RotorRig or TwoAxisRig with current=: its axes' kyy, kiy estimate the force "
+                "and their lags correct the process")  # fmt: skip
+    drive = force if current is None else current
     if displacement is None:
-        forces, displacements, fs = _from_recordings(force, names, fs)
+        forces, displacements, fs = _from_recordings(drive, names, fs, what)
     else:
-        F, Y = np.asarray(force, dtype=np.float64), np.asarray(displacement, dtype=np.float64)
-        require(F.ndim == 3 and F.shape[0] == N and F.shape[2] == N, "force shape", F.shape,
+        F, Y = np.asarray(drive, dtype=np.float64), np.asarray(displacement, dtype=np.float64)
+        require(F.ndim == 3 and F.shape[0] == N and F.shape[2] == N, f"{what} shape", F.shape,
                 f"({N} experiments, samples, {N} axes: {', '.join(names)})")  # fmt: skip
-        require(Y.shape == F.shape, "displacement shape", Y.shape, f"{F.shape} like force")
-        require(fs is not None, "fs", fs, "the sampling frequency (Hz) of force and displacement arrays")
+        require(Y.shape == F.shape, "displacement shape", Y.shape, f"{F.shape} like {what}")
+        require(fs is not None, "fs", fs, f"the sampling frequency (Hz) of {what} and displacement arrays")
         forces, displacements = list(F), list(Y)
     fs = real("fs", fs, "Hz", positive=True)
     f0 = real("f0", f0, "Hz", positive=True)
@@ -147,7 +195,7 @@ def identify(
                       f"samples (over the {N} experiments) after the last whole period", IdentificationWarning,
                       stacklevel=2)  # fmt: skip
     F, Y = (np.stack([x[start:whole] for x in xs]) for xs in (forces, displacements))
-    for name, x in (("force", F), ("displacement", Y)):
+    for name, x in ((what, F), ("displacement", Y)):
         bad = np.argwhere(~np.isfinite(x))
         if bad.size:
             e, s, j = bad[0]
@@ -159,8 +207,74 @@ def identify(
     bad = ~(condition <= MAX_CONDITION)
     if bad.any():
         first = int(np.argmax(bad))
-        raise ValueError(f"force must tell the {N} axes apart at every line: the experiments' force matrix has "
+        raise ValueError(f"{what} must tell the {N} axes apart at every line: the experiments' {what} matrix has "
                          f"condition number {condition[first]:.3g} at {harmonics[first] * f0:g} Hz ({int(bad.sum())} "
                          f"of {bad.size} lines above {MAX_CONDITION:g}); drive experiment e's axis j with "
                          f"hadamard_signs({N})[e, j] times the multisine")  # fmt: skip
-    return estimate(Fp, Yp, harmonics * f0, mech, period, window)
+    if what == "force":
+        est = estimate(Fp, Yp, harmonics * f0, mech, period, window)
+    else:
+        est = estimate(amb_force(rig, Yp, Fp), Yp, harmonics * f0, mech, period, window)
+        est = replace(est, process=corrected_process(rig, fs, est.freq, est.H))
+    chosen = lines is not None or f_max is not None
+    clearance = [a.clearance for a in axes] if isinstance(axes, (tuple, list)) else [None] * N
+    _check(F, Y, harmonics, chosen, est, mech, clearance, fs, f0, what)
+    return est
+
+
+def _check(
+    F: np.ndarray, Y: np.ndarray, harmonics: np.ndarray, chosen: bool, est: EstimateN, mech: Mechanics,
+    clearance: list[float | None], fs: float, f0: float, what: str,
+) -> None:  # fmt: skip
+    """:func:`amb_fast.identify`'s checks on every experiment's every axis (F: force or current, Y: probes; each
+    (experiments, samples, N) after settling); each warning once, naming the first experiment and axis."""
+    E, _, N = F.shape
+    period = period_samples(fs, f0)
+    unit = "N" if what == "force" else "A"
+    weak = np.zeros(harmonics.size, dtype=bool)
+    floors = np.zeros(2)
+    tags: list[str] = []  # where each caught warning came from
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for e in range(E):
+            for j in range(N):
+                where = f"experiment {e}, axis {est.axes[j]}"
+                spectra = _checks.period_spectra(F[e, :, j], period)
+                others = np.setdiff1d(_checks.excited_harmonics(spectra), harmonics) if chosen else None
+                excited = harmonics if others is None else np.union1d(harmonics, others)
+                fraction = _checks.non_periodic_fraction(spectra, excited)
+                if fraction > _checks.NON_PERIODIC:
+                    message = _checks.non_periodic_message(fraction, fs, f0, period, spectra.shape[0], what=what)
+                    warnings.warn(NonPeriodicExcitationWarning(message, fraction), stacklevel=2)
+                else:
+                    _checks.warn_short_period(_checks.excited_harmonics(spectra), fs, f0, period, what=what)
+                gaps = np.setdiff1d(np.arange(1, harmonics.max()), excited)
+                x, y = (_line_levels(v, period, harmonics, gaps, others) for v in (F[e, :, j], Y[e, :, j]))
+                weak |= _checks.weak_lines(x[0], y[0], x[1], y[1])
+                floors = np.fmax(floors, [_checks.floor(x[1]) or 0.0, _checks.floor(y[1]) or 0.0])
+                _checks.warn_transient(Y[e, :, j], period)
+                tags += [where] * (len(caught) - len(tags))
+        _checks.warn_mostly_weak(weak, floors[0], floors[1], what=(what, unit))
+        tags += [f"{E} experiments"] * (len(caught) - len(tags))
+        inertia = np.abs(known_dynamics(mech, est.freq).real)
+        for i in range(N):
+            # From the bearings the structure's own k is its process, perhaps nil: range-check H instead.
+            k = est.k[:, i, i] if what == "force" else est.H[:, i, i].real
+            _checks.warn_implausible(k, est.H[:, i, i], Y[:, -16 * period :, i], clearance[i],
+                                     inertia=inertia[:, i, i])  # fmt: skip
+            tags += [f"axis {est.axes[i]}"] * (len(caught) - len(tags))
+    seen: set[str] = set()
+    for where, w in zip(tags, caught):
+        kind = f"{w.category.__name__} {str(w.message).split()[:3]}"  # the check, not its numbers
+        if kind not in seen:  # once per kind: the first experiment and axis that showed it
+            seen.add(kind)
+            note = w.message if isinstance(w.message, Warning) else w.category(w.message)
+            note.args = (f"{where}: {note.args[0]}", *note.args[1:])  # keeps its attributes (fraction, ...)
+            warnings.warn(note, stacklevel=3)
+
+
+def _line_levels(x: np.ndarray, period: int, harmonics: np.ndarray, gaps: np.ndarray, others: np.ndarray | None,
+                 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """One channel's period-averaged amplitudes at the lines, and the levels that show its noise."""
+    spectrum = np.fft.rfft(x.reshape(-1, period).mean(axis=0)) * (2.0 / period)
+    return spectrum[harmonics], _checks.noise_levels(x, period, harmonics, np.abs(spectrum[gaps]), skip=others)
