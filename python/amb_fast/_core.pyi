@@ -147,6 +147,19 @@ def run_sweep(
 ) -> SweepEstimates: ...
 def eigenvalues(stack: ArrayLike, workers: int = 1) -> np.ndarray: ...
 
+# Campbell diagrams: the sampled loop at many speeds, its poles and their shapes at a few rows.
+def sampled_loops(
+    A0: ArrayLike,
+    A1: ArrayLike,
+    B: ArrayLike,
+    T: float,
+    values: ArrayLike,
+    feedback: ArrayLike,
+    lower: ArrayLike,
+    workers: int = 1,
+) -> np.ndarray: ...
+def loop_modes(stack: ArrayLike, R: ArrayLike, workers: int = 1) -> tuple[np.ndarray, np.ndarray]: ...
+
 # Two axes (amb_fast.two_axis): the generic dense MIMO loop.
 def mimo_simulate(
     M: ArrayLike,
