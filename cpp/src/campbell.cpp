@@ -43,22 +43,118 @@ void sampled_loops(const RowMatrixXd& A0, const RowMatrixXd& A1, const RowMatrix
 
 namespace {
 
-// The eigenvalues of the real quasi-triangular Schur form T (EigenSolver's formula for a 2 x 2 block).
-void schur_eigenvalues(const Eigen::MatrixXd& T, cd* values) {
-    const Eigen::Index n = T.rows();
-    for (Eigen::Index i = 0; i < n; ++i) {
-        if (i == n - 1 || T(i + 1, i) == 0.0) {
-            values[i] = T(i, i);
-            continue;
-        }
-        const double p = 0.5 * (T(i, i) - T(i + 1, i + 1));
-        double t0 = T(i + 1, i), t1 = T(i, i + 1);
-        const double scale = std::max(std::abs(p), std::max(std::abs(t0), std::abs(t1)));
-        t0 /= scale, t1 /= scale;
-        const double p0 = p / scale, z = scale * std::sqrt(std::abs(p0 * p0 + t0 * t1));
-        values[i] = cd(T(i + 1, i + 1) + p, z);
-        values[i + 1] = cd(T(i + 1, i + 1) + p, -z);
-        ++i;
+// The eigenvalues of the upper Hessenberg matrix a (n x n, row-major, overwritten) by Francis double-shift QR
+// steps on the active window only (EISPACK's hqr): no Schur form, no vectors. A complex pair comes as
+// (x + j z, x - j z), z > 0.
+void hessenberg_eigenvalues(double* a, Eigen::Index n, cd* values) {
+    const auto at = [&](Eigen::Index i, Eigen::Index j) -> double& { return a[i * n + j]; };
+    const auto sign = [](double x, double y) { return y >= 0.0 ? std::abs(x) : -std::abs(x); };
+    const double eps = std::numeric_limits<double>::epsilon();
+    double norm = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i)
+        for (Eigen::Index j = std::max<Eigen::Index>(i - 1, 0); j < n; ++j) norm += std::abs(at(i, j));
+    Eigen::Index nn = n - 1, l = 0;
+    double t = 0.0;  // the exceptional shifts' sum
+    while (nn >= 0) {
+        int its = 0;
+        do {
+            for (l = nn; l >= 1; --l) {  // a negligible subdiagonal entry splits the window
+                double s = std::abs(at(l - 1, l - 1)) + std::abs(at(l, l));
+                if (s == 0.0) s = norm;
+                if (std::abs(at(l, l - 1)) <= eps * s) {
+                    at(l, l - 1) = 0.0;
+                    break;
+                }
+            }
+            if (l < 0) l = 0;
+            double x = at(nn, nn);
+            if (l == nn) {  // one root
+                values[nn--] = x + t;
+                continue;
+            }
+            double y = at(nn - 1, nn - 1), w = at(nn, nn - 1) * at(nn - 1, nn);
+            if (l == nn - 1) {  // two roots
+                const double p = 0.5 * (y - x), q = p * p + w, z = std::sqrt(std::abs(q));
+                x += t;
+                if (q >= 0.0) {
+                    const double zz = p + sign(z, p);
+                    values[nn - 1] = values[nn] = x + zz;
+                    if (zz != 0.0) values[nn] = x - w / zz;
+                } else {
+                    values[nn - 1] = cd(x + p, z);
+                    values[nn] = cd(x + p, -z);
+                }
+                nn -= 2;
+                continue;
+            }
+            if (its == 60) throw std::runtime_error("eigenvalues did not converge");
+            if (its > 0 && its % 10 == 0) {  // an exceptional shift
+                t += x;
+                for (Eigen::Index i = 0; i <= nn; ++i) at(i, i) -= x;
+                const double s = std::abs(at(nn, nn - 1)) + std::abs(at(nn - 1, nn - 2));
+                y = x = 0.75 * s;
+                w = -0.4375 * s * s;
+            }
+            ++its;
+            Eigen::Index m = nn - 2;
+            double p = 0.0, q = 0.0, r = 0.0, z = 0.0;
+            for (; m >= l; --m) {  // where two small subdiagonal entries let the step start
+                z = at(m, m);
+                r = x - z;
+                double s = y - z;
+                p = (r * s - w) / at(m + 1, m) + at(m, m + 1);
+                q = at(m + 1, m + 1) - z - r - s;
+                r = at(m + 2, m + 1);
+                s = std::abs(p) + std::abs(q) + std::abs(r);
+                p /= s, q /= s, r /= s;
+                if (m == l) break;
+                const double u = std::abs(at(m, m - 1)) * (std::abs(q) + std::abs(r));
+                const double v = std::abs(p) * (std::abs(at(m - 1, m - 1)) + std::abs(z) + std::abs(at(m + 1, m + 1)));
+                if (u <= eps * v) break;
+            }
+            for (Eigen::Index i = m + 2; i <= nn; ++i) {
+                at(i, i - 2) = 0.0;
+                if (i != m + 2) at(i, i - 3) = 0.0;
+            }
+            for (Eigen::Index k = m; k <= nn - 1; ++k) {  // the double-shift step, a 3 x 3 reflector at a time
+                if (k != m) {
+                    p = at(k, k - 1);
+                    q = at(k + 1, k - 1);
+                    r = k != nn - 1 ? at(k + 2, k - 1) : 0.0;
+                    x = std::abs(p) + std::abs(q) + std::abs(r);
+                    if (x != 0.0) p /= x, q /= x, r /= x;
+                }
+                const double s = sign(std::sqrt(p * p + q * q + r * r), p);
+                if (s == 0.0) continue;
+                if (k == m) {
+                    if (l != m) at(k, k - 1) = -at(k, k - 1);
+                } else {
+                    at(k, k - 1) = -s * x;
+                }
+                p += s;
+                x = p / s, y = q / s, z = r / s;
+                q /= p, r /= p;
+                for (Eigen::Index j = k; j <= nn; ++j) {
+                    p = at(k, j) + q * at(k + 1, j);
+                    if (k != nn - 1) {
+                        p += r * at(k + 2, j);
+                        at(k + 2, j) -= p * z;
+                    }
+                    at(k + 1, j) -= p * y;
+                    at(k, j) -= p * x;
+                }
+                const Eigen::Index last = std::min(nn, k + 3);
+                for (Eigen::Index i = l; i <= last; ++i) {
+                    p = x * at(i, k) + y * at(i, k + 1);
+                    if (k != nn - 1) {
+                        p += z * at(i, k + 2);
+                        at(i, k + 2) -= p * r;
+                    }
+                    at(i, k + 1) -= p * q;
+                    at(i, k) -= p;
+                }
+            }
+        } while (l < nn - 1);
     }
 }
 
@@ -109,7 +205,7 @@ void loop_modes(const double* stack, Eigen::Index count, Eigen::Index m, const R
     const auto M = static_cast<std::size_t>(m);
     in_blocks(count, 8, workers, [&] {
         return [&, hessenberg = Eigen::HessenbergDecomposition<Eigen::MatrixXd>(m),
-                schur = Eigen::RealSchur<Eigen::MatrixXd>(m), U = std::vector<cd>(M * M), lower = std::vector<cd>(M),
+                work = RowMatrixXd(m, m), U = std::vector<cd>(M * M), lower = std::vector<cd>(M),
                 swapped = std::vector<char>(M), y = std::vector<cd>(M), v = std::vector<cd>(M),
                 Q = Eigen::MatrixXd(m, m)](Eigen::Index begin, Eigen::Index end) mutable {
             for (Eigen::Index s = begin; s < end; ++s) {
@@ -118,10 +214,9 @@ void loop_modes(const double* stack, Eigen::Index count, Eigen::Index m, const R
                 hessenberg.compute(d.cwiseInverse().asDiagonal() * A * d.asDiagonal());
                 const Eigen::MatrixXd H = hessenberg.matrixH();
                 Q = hessenberg.matrixQ();
-                schur.computeFromHessenberg(H, Q, false);
-                if (schur.info() != Eigen::Success) throw std::runtime_error("eigenvalues did not converge");
                 cd* value = values + s * m;
-                schur_eigenvalues(schur.matrixT(), value);
+                work = H;
+                hessenberg_eigenvalues(work.data(), m, value);
                 const double tiny = std::numeric_limits<double>::epsilon() * std::max(H.cwiseAbs().maxCoeff(), 1e-300);
                 for (Eigen::Index i = 0; i < m; ++i) {
                     cd* shape = shapes + s * r * m + i;  // shape[j * m]: row j
