@@ -3,45 +3,53 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import scipy.linalg
 
 import amb_fast as af
 from amb_fast import _core
-from amb_fast.system import _campbell, _control
-
-
-def closed(A: np.ndarray, B: np.ndarray, T: float, feedback: np.ndarray, lower: np.ndarray) -> np.ndarray:
-    """The loop in numpy: scipy's expm of the augmented matrix, closed with the controller's rows."""
-    n, k = B.shape
-    aug = np.zeros((n + k, n + k))
-    aug[:n, :n], aug[:n, n:] = A * T, B * T
-    E = scipy.linalg.expm(aug)
-    top = np.hstack([E[:n, :n], np.zeros((n, lower.shape[0]))]) + E[:n, n:] @ feedback
-    return np.vstack([top, lower])
+from amb_fast.system import _campbell, _control, _model
 
 
 @pytest.mark.parametrize("workers", [1, 2])
-def test_sampled_loops_are_scipys(workers: int) -> None:
+def test_hold_stacks_are_scipys_expm(workers: int) -> None:
     rng = np.random.default_rng(1)
-    n, k, c = 7, 2, 3
+    n, k = 7, 2
     A0, A1 = rng.standard_normal((n, n)) * 300.0, rng.standard_normal((n, n))
     B = rng.standard_normal((n, k))
-    feedback, lower = rng.standard_normal((k, n + c)), rng.standard_normal((c, n + c)) * 0.3
     speeds = np.linspace(-500.0, 2000.0, 37)
-    T = 1.0 / 4000.0
-    got = _core.sampled_loops(A0, A1, B, T, speeds, feedback, lower, workers)
-    for M, W in zip(got, speeds):
-        expected = closed(A0 + W * A1, B, T, feedback, lower)
-        np.testing.assert_allclose(M, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
+    holds = [2.5e-4, 1.7e-4]
+    got = _core.hold_stacks(A0, A1, B, holds, speeds, workers)
+    assert got.shape == (speeds.size, 2, n, n + k)
+    for E, W in zip(got, speeds):
+        for j, h in enumerate(holds):
+            aug = np.zeros((n + k, n + k))
+            aug[:n, :n], aug[:n, n:] = (A0 + W * A1) * h, B * h
+            expected = scipy.linalg.expm(aug)[:n]
+            np.testing.assert_allclose(E[j], expected, rtol=0, atol=1e-13 * np.abs(expected).max())
 
 
-def test_sampled_loops_refuse_mismatched_shapes() -> None:
-    with pytest.raises(ValueError, match="feedback"):
-        _core.sampled_loops(np.eye(3), np.eye(3), np.ones((3, 1)), 1e-3, [0.0], np.ones((2, 4)), np.ones((1, 4)))
+def test_hold_stacks_refuse_mismatched_shapes_and_holds() -> None:
     with pytest.raises(ValueError, match="A0, A1, B"):
-        _core.sampled_loops(np.eye(3), np.eye(2), np.ones((3, 1)), 1e-3, [0.0], np.ones((1, 4)), np.ones((1, 4)))
+        _core.hold_stacks(np.eye(3), np.eye(2), np.ones((3, 1)), [1e-3], [0.0])
+    with pytest.raises(ValueError, match="hold"):
+        _core.hold_stacks(np.eye(3), np.eye(3), np.ones((3, 1)), [0.0], [0.0])
+
+
+def test_loop_stack_is_loop_model_with_any_dead_times() -> None:
+    """Every speed's loop as loop_model makes it: axes without dead time, with a fraction of a sample only,
+    whole samples only and both (4 kHz: T = 0.25 ms), so the core's holds over T - delta are checked."""
+    axes = [replace(af.Rig.paper(), dead_time=d) for d in (0.0, 1e-4, 5e-4, 6e-4)]
+    rig = af.RotorRig(af.RotorRig.example().rotor, axes)
+    spec = _control.controller_matrix(af.RotorRig.example_controller(), 4)
+    speeds = np.array([0.0, 2500.0])
+    stack = _campbell.loop_stack(rig, spec, speeds)
+    for M, W in zip(stack, speeds):
+        expected = _model.loop_model(rig.at_speed(W), spec).M
+        np.testing.assert_allclose(M, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
 
 
 def matched(values: np.ndarray, expected: np.ndarray) -> float:

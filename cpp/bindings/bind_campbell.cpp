@@ -9,24 +9,23 @@ using namespace amb_fast;
 void bind_campbell(py::module_& m) {
     using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
     m.def(
-        "sampled_loops",
-        [](const RowMatrixXd& A0, const RowMatrixXd& A1, const RowMatrixXd& B, double T, const Array& values,
-           const RowMatrixXd& feedback, const RowMatrixXd& lower, int workers) {
+        "hold_stacks",
+        [](const RowMatrixXd& A0, const RowMatrixXd& A1, const RowMatrixXd& B, const std::vector<double>& holds,
+           const Array& values, int workers) {
             if (values.ndim() != 1) throw std::invalid_argument("values must be 1-D");
-            const auto count = static_cast<Eigen::Index>(values.shape(0)), size = A0.rows() + lower.rows();
-            py::array_t<double> out({count, size, size});
+            const auto count = static_cast<Eigen::Index>(values.shape(0));
+            py::array_t<double> out({count, static_cast<Eigen::Index>(holds.size()), A0.rows(), A0.rows() + B.cols()});
             double* at = out.mutable_data();
             const double* p = values.data();
             interruptible([&] {
-                sampled_loops(A0, A1, B, T, p, count, feedback, lower, workers, at);
+                hold_stacks(A0, A1, B, holds, p, count, workers, at);
                 return 0;
             });
             return out;
         },
-        py::arg("A0"), py::arg("A1"), py::arg("B"), py::arg("T"), py::arg("values"), py::arg("feedback"),
-        py::arg("lower"), py::arg("workers") = 1,
-        "The sampled loops (count, m, m) of the plant A0 + p A1, B held over T (exact zero-order hold), closed as "
-        "[[Phi, 0], [lower]] + [[Gamma], [0]] feedback, for each p of values; on `workers` threads, GIL released.");
+        py::arg("A0"), py::arg("A1"), py::arg("B"), py::arg("holds"), py::arg("values"), py::arg("workers") = 1,
+        "[Phi | Gamma] (count, holds, n, n + k): the exact zero-order hold of A0 + p A1, B over each hold length "
+        "(s), for each p of values; on `workers` threads, GIL released.");
     m.def(
         "loop_modes",
         [](const Array& stack, const RowMatrixXd& R, int workers) {

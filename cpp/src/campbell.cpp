@@ -15,28 +15,24 @@ namespace amb_fast {
 
 using cd = std::complex<double>;
 
-void sampled_loops(const RowMatrixXd& A0, const RowMatrixXd& A1, const RowMatrixXd& B, double T, const double* values,
-                   Eigen::Index count, const RowMatrixXd& feedback, const RowMatrixXd& lower, int workers,
-                   double* out) {
-    const Eigen::Index n = A0.rows(), k = B.cols(), m = n + lower.rows();
+void hold_stacks(const RowMatrixXd& A0, const RowMatrixXd& A1, const RowMatrixXd& B, const std::vector<double>& holds,
+                 const double* values, Eigen::Index count, int workers, double* out) {
+    const Eigen::Index n = A0.rows(), k = B.cols(), H = static_cast<Eigen::Index>(holds.size());
     require(A0.cols() == n && A1.rows() == n && A1.cols() == n && B.rows() == n, "A0, A1, B", n,
             "n x n, n x n and n x k");
-    require(feedback.rows() == k && feedback.cols() == m && lower.cols() == m, "feedback, lower", m,
-            "k x m and (m - n) x m");
+    for (const double h : holds) require(std::isfinite(h) && h > 0.0, "hold", h, "> 0 (s)");
     in_blocks(count, 16, workers, [&] {
-        return [&, augmented = Eigen::MatrixXd(n + k, n + k), E = Eigen::MatrixXd(n + k, n + k),
-                M = RowMatrixXd(m, m)](Eigen::Index begin, Eigen::Index end) mutable {
-            for (Eigen::Index s = begin; s < end; ++s) {
-                augmented.setZero();
-                augmented.topLeftCorner(n, n) = (A0 + values[s] * A1) * T;
-                augmented.topRightCorner(n, k) = B * T;
-                E = augmented.exp();
-                M.topRows(n).setZero();
-                M.topLeftCorner(n, n) = E.topLeftCorner(n, n);
-                M.topRows(n).noalias() += E.topRightCorner(n, k) * feedback;
-                M.bottomRows(m - n) = lower;
-                Eigen::Map<RowMatrixXd>(out + s * m * m, m, m) = M;
-            }
+        return [&, augmented = Eigen::MatrixXd(n + k, n + k), E = Eigen::MatrixXd(n + k, n + k)](
+                   Eigen::Index begin, Eigen::Index end) mutable {
+            for (Eigen::Index s = begin; s < end; ++s)
+                for (Eigen::Index j = 0; j < H; ++j) {
+                    const double h = holds[static_cast<std::size_t>(j)];
+                    augmented.setZero();
+                    augmented.topLeftCorner(n, n) = (A0 + values[s] * A1) * h;
+                    augmented.topRightCorner(n, k) = B * h;
+                    E = augmented.exp();
+                    Eigen::Map<RowMatrixXd>(out + (s * H + j) * n * (n + k), n, n + k) = E.topRows(n);
+                }
         };
     });
 }

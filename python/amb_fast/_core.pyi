@@ -148,15 +148,8 @@ def run_sweep(
 def eigenvalues(stack: ArrayLike, workers: int = 1) -> np.ndarray: ...
 
 # Campbell diagrams: the sampled loop at many speeds, its poles and their shapes at a few rows.
-def sampled_loops(
-    A0: ArrayLike,
-    A1: ArrayLike,
-    B: ArrayLike,
-    T: float,
-    values: ArrayLike,
-    feedback: ArrayLike,
-    lower: ArrayLike,
-    workers: int = 1,
+def hold_stacks(
+    A0: ArrayLike, A1: ArrayLike, B: ArrayLike, holds: Sequence[float], values: ArrayLike, workers: int = 1
 ) -> np.ndarray: ...
 def loop_modes(stack: ArrayLike, R: ArrayLike, workers: int = 1) -> tuple[np.ndarray, np.ndarray]: ...
 

@@ -4,19 +4,17 @@
 
 #include <Eigen/Dense>
 #include <complex>
+#include <vector>
 
 namespace amb_fast {
 
 using RowMatrixXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
-// The sampled loops of a plant affine in one parameter p: for each of `count` values p, the plant
-// A0 + p A1 (n x n) with inputs B (n x k) held over T, Phi and Gamma from the exact zero-order hold
-// (the matrix exponential of [[A T, B T], [0, 0]]), closed as
-//     M = [[Phi, 0], [lower]] + [[Gamma], [0]] feedback      (m x m, m = n + lower.rows())
-// with feedback (k x m) and lower ((m - n) x m) the controller's rows. out: count row-major m x m matrices.
-void sampled_loops(const RowMatrixXd& A0, const RowMatrixXd& A1, const RowMatrixXd& B, double T, const double* values,
-                   Eigen::Index count, const RowMatrixXd& feedback, const RowMatrixXd& lower, int workers,
-                   double* out);
+// The exact zero-order holds of a plant affine in one parameter p: for each of `count` values p and each of
+// the hold lengths h (s), [Phi | Gamma] = the top n rows of the matrix exponential of [[A h, B h], [0, 0]]
+// for A = A0 + p A1 (n x n), B (n x k). out: (count, holds, n, n + k), row-major.
+void hold_stacks(const RowMatrixXd& A0, const RowMatrixXd& A1, const RowMatrixXd& B, const std::vector<double>& holds,
+                 const double* values, Eigen::Index count, int workers, double* out);
 
 // For each of `count` real m x m matrices (stack: row-major, one after the other): its eigenvalues
 // (values[k * m + i], balanced as `eigenvalues` does) and, for each eigenvalue with a non-zero angle, R v

@@ -16,9 +16,10 @@ from numpy.typing import ArrayLike
 
 from .. import _core
 from .._equality import ArrayRecord
+from .._linear import split_dead_time
 from .._validate import require
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix, controller_state_space
-from ._model import System, loop_model, plant, sensor_rows
+from ._model import System, plant, sensor_rows
 from ._rotor import RotorRig
 
 
@@ -147,19 +148,47 @@ def _workers(count: int) -> int:
 
 
 def loop_stack(rig: RotorRig, controller: ControllerMatrix, speeds: np.ndarray) -> np.ndarray:
-    """The closed loop's matrix at each speed, (speeds, n, n). The continuous plant is affine in the speed
-    (only the gyroscopic term moves), so without dead time the core discretises and closes every speed's
-    loop (on its threads) from the plant at rest, its gyroscopic rows per rad/s and the controller's rows;
-    with a dead time each speed's loop is :func:`loop_model`'s."""
-    if any(axis.dead_time > 0 for axis in rig.axes):
-        return np.stack([loop_model(rig.at_speed(float(W)), controller).M for W in speeds])
+    """The closed loop's matrix at each speed, (speeds, n, n), as :func:`loop_model` makes it (the same states).
+
+    The continuous plant is affine in the speed (only the gyroscopic term moves), so the core discretises
+    every speed (on its threads) from the plant at rest and its gyroscopic rows per rad/s, over the sample
+    and, for a fractional dead time ``delta``, over ``T - delta``: ``G0 = Gamma_u(T - delta)`` and
+    ``G1 = Phi(T - delta) Gamma_u(delta) = Gamma_u(T) - Gamma_u(T - delta)`` (:func:`discrete_plant`'s
+    columns); the command lines and the controller are the same at every speed."""
     A0, B, _ = plant(rig.at_speed(0.0))
     A1 = plant(rig.at_speed(1.0))[0] - A0  # the gyroscopic rows per rad/s
-    N = B.shape[1] // 2
+    n, N = A0.shape[0], B.shape[1] // 2
+    T = 1.0 / controller.fs
+    splits = [split_dead_time(axis.dead_time, controller.fs) for axis in rig.axes]
+    fractions = sorted({f for _, f in splits if f > 0})
+    E = _core.hold_stacks(A0, A1, B[:, N:], [T] + [T - f for f in fractions], speeds, _workers(speeds.size))
+    Gamma = E[:, 0, :, n:]
+    lines = [m + (f > 0) for m, f in splits]
+    size = n + sum(lines)
+    Phi, Gu = np.zeros((speeds.size, size, size)), np.zeros((speeds.size, size, N))
+    Phi[:, :n, :n] = E[:, 0, :, :n]
+    at = n
+    for a, ((whole, f), line) in enumerate(zip(splits, lines)):
+        G0 = E[:, 1 + fractions.index(f), :, n + a] if f > 0 else Gamma[:, :, a]
+        if whole == 0:
+            Gu[:, :n, a] = G0
+        else:
+            Phi[:, :n, at + whole - 1] = G0
+        if f > 0:
+            Phi[:, :n, at + line - 1] = Gamma[:, :, a] - G0
+        if line:
+            Gu[:, at, a] = 1.0  # <axis>.dead1' = u
+            Phi[:, at : at + line, at : at + line] = np.eye(line, k=-1)
+        at += line
     Ac, Bc, Cc, Dc = controller_state_space(controller)
-    S = sensor_rows(rig)
-    feedback, lower = np.hstack([Dc @ S, Cc]), np.hstack([Bc @ S, Ac])
-    return _core.sampled_loops(A0, A1, B[:, N:], 1.0 / controller.fs, speeds, feedback, lower, _workers(speeds.size))
+    S = np.zeros((N, size))
+    S[:, :n] = sensor_rows(rig)
+    M = np.empty((speeds.size, size + Ac.shape[0], size + Ac.shape[0]))
+    M[:, :size, :size] = Phi + Gu @ (Dc @ S)
+    M[:, :size, size:] = Gu @ Cc
+    M[:, size:, :size] = Bc @ S
+    M[:, size:, size:] = Ac
+    return M
 
 
 def campbell(rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike) -> Campbell:
