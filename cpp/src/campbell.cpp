@@ -9,6 +9,8 @@
 
 #include "amb_fast/blocks.hpp"
 #include "amb_fast/errors.hpp"
+#include "amb_fast/inline.hpp"
+#include "amb_fast/lanes.hpp"
 #include "amb_fast/steady.hpp"
 
 namespace amb_fast {
@@ -154,43 +156,81 @@ void hessenberg_eigenvalues(double* a, Eigen::Index n, cd* values) {
     }
 }
 
+// Inverse iteration's storage: H - lambda I's LU factors, real and imaginary parts apart (row-major; the
+// row operations' multipliers and swaps), and the vector y.
+struct InverseIteration {
+    explicit InverseIteration(Eigen::Index n)
+        : ur(static_cast<std::size_t>(n * n)), ui(ur.size()), lr(static_cast<std::size_t>(n)), li(lr.size()),
+          swapped(lr.size()), yr(lr.size()), yi(lr.size()) {}
+    std::vector<double> ur, ui, lr, li, swapped, yr, yi;
+};
+
 // y with H y = lambda y, |y| = 1, by two steps of inverse iteration from the start vector y (H upper
-// Hessenberg; LU of H - lambda I pivoting between neighbouring rows; a zero pivot made tiny, as LAPACK's hsein).
-void inverse_iteration(const Eigen::MatrixXd& H, cd lambda, double tiny, std::vector<cd>& U, std::vector<cd>& lower,
-                       std::vector<char>& swapped, std::vector<cd>& y) {
-    const Eigen::Index n = H.rows();
-    const auto u = [&](Eigen::Index i, Eigen::Index j) -> cd& { return U[static_cast<std::size_t>(i * n + j)]; };
-    for (Eigen::Index i = 0; i < n; ++i)
-        for (Eigen::Index j = 0; j < n; ++j) u(i, j) = j >= i - 1 ? cd(H(i, j)) - (i == j ? lambda : 0.0) : 0.0;
-    for (Eigen::Index j = 0; j + 1 < n; ++j) {
-        const auto J = static_cast<std::size_t>(j);
-        swapped[J] = std::norm(u(j + 1, j)) > std::norm(u(j, j));
-        if (swapped[J])
-            for (Eigen::Index c = j; c < n; ++c) std::swap(u(j, c), u(j + 1, c));
-        if (u(j, j) == 0.0) u(j, j) = tiny;
-        const cd l = u(j + 1, j) / u(j, j);
-        lower[J] = l;
-        u(j + 1, j) = 0.0;
-        for (Eigen::Index c = j + 1; c < n; ++c) u(j + 1, c) -= l * u(j, c);
+// Hessenberg, row-major; LU of H - lambda I pivoting between neighbouring rows; a zero pivot made tiny, as
+// LAPACK's hsein). Elementwise loops over real arrays (vectorised where the processor can; no reduction is
+// reordered, so the same digits either way).
+AMB_FAST_ALWAYS_INLINE void inverse_iteration_kernel(const double* H, Eigen::Index n, double lambda_r,
+                                                     double lambda_i, double tiny, InverseIteration& w) {
+    double *ur = w.ur.data(), *ui = w.ui.data(), *yr = w.yr.data(), *yi = w.yi.data();
+    for (Eigen::Index i = 0; i < n; ++i) {
+        for (Eigen::Index j = std::max<Eigen::Index>(i - 1, 0); j < n; ++j) ur[i * n + j] = H[i * n + j], ui[i * n + j] = 0.0;
+        ur[i * n + i] -= lambda_r;
+        ui[i * n + i] = -lambda_i;
     }
-    if (u(n - 1, n - 1) == 0.0) u(n - 1, n - 1) = tiny;
+    for (Eigen::Index j = 0; j + 1 < n; ++j) {
+        double *ar = ur + j * n, *ai = ui + j * n, *br = ur + (j + 1) * n, *bi = ui + (j + 1) * n;
+        const bool swap = br[j] * br[j] + bi[j] * bi[j] > ar[j] * ar[j] + ai[j] * ai[j];
+        w.swapped[static_cast<std::size_t>(j)] = swap;
+        if (swap)
+            for (Eigen::Index c = j; c < n; ++c) std::swap(ar[c], br[c]), std::swap(ai[c], bi[c]);
+        if (ar[j] == 0.0 && ai[j] == 0.0) ar[j] = tiny;
+        const double norm = ar[j] * ar[j] + ai[j] * ai[j];
+        const double mr = (br[j] * ar[j] + bi[j] * ai[j]) / norm, mi = (bi[j] * ar[j] - br[j] * ai[j]) / norm;
+        w.lr[static_cast<std::size_t>(j)] = mr, w.li[static_cast<std::size_t>(j)] = mi;
+        for (Eigen::Index c = j + 1; c < n; ++c) {
+            const double xr = ar[c], xi = ai[c];
+            br[c] -= mr * xr - mi * xi;
+            bi[c] -= mr * xi + mi * xr;
+        }
+    }
+    if (ur[n * n - 1] == 0.0 && ui[n * n - 1] == 0.0) ur[n * n - 1] = tiny;
     for (int step = 0; step < 2; ++step) {
         for (Eigen::Index j = 0; j + 1 < n; ++j) {
             const auto J = static_cast<std::size_t>(j);
-            if (swapped[J]) std::swap(y[J], y[J + 1]);
-            y[J + 1] -= lower[J] * y[J];
+            if (w.swapped[J] != 0.0) std::swap(yr[j], yr[j + 1]), std::swap(yi[j], yi[j + 1]);
+            yr[j + 1] -= w.lr[J] * yr[j] - w.li[J] * yi[j];
+            yi[j + 1] -= w.lr[J] * yi[j] + w.li[J] * yr[j];
         }
         for (Eigen::Index i = n - 1; i >= 0; --i) {
-            cd sum = y[static_cast<std::size_t>(i)];
-            for (Eigen::Index c = i + 1; c < n; ++c) sum -= u(i, c) * y[static_cast<std::size_t>(c)];
-            y[static_cast<std::size_t>(i)] = sum / u(i, i);
+            const double *rr = ur + i * n, *ri = ui + i * n;
+            double sr = yr[i], si = yi[i];
+            for (Eigen::Index c = i + 1; c < n; ++c) {
+                sr -= rr[c] * yr[c] - ri[c] * yi[c];
+                si -= rr[c] * yi[c] + ri[c] * yr[c];
+            }
+            const double norm = rr[i] * rr[i] + ri[i] * ri[i];
+            yr[i] = (sr * rr[i] + si * ri[i]) / norm;
+            yi[i] = (si * rr[i] - sr * ri[i]) / norm;
         }
         double norm = 0.0;
-        for (const cd& v : y) norm += std::norm(v);
-        norm = std::sqrt(norm);
-        for (cd& v : y) v /= norm;
+        for (Eigen::Index i = 0; i < n; ++i) norm += yr[i] * yr[i] + yi[i] * yi[i];
+        norm = 1.0 / std::sqrt(norm);
+        for (Eigen::Index i = 0; i < n; ++i) yr[i] *= norm, yi[i] *= norm;
     }
 }
+
+void inverse_iteration_portable(const double* H, Eigen::Index n, double lr, double li, double tiny,
+                                InverseIteration& w) {
+    inverse_iteration_kernel(H, n, lr, li, tiny, w);
+}
+#if AMB_FAST_WIDE_LANES
+__attribute__((target("avx2"))) void inverse_iteration_avx2(const double* H, Eigen::Index n, double lr, double li,
+                                                            double tiny, InverseIteration& w) {
+    inverse_iteration_kernel(H, n, lr, li, tiny, w);
+}
+#else
+constexpr auto inverse_iteration_avx2 = inverse_iteration_portable;
+#endif
 
 }  // namespace
 
@@ -201,14 +241,13 @@ void loop_modes(const double* stack, Eigen::Index count, Eigen::Index m, const R
     const auto M = static_cast<std::size_t>(m);
     in_blocks(count, 8, workers, [&] {
         return [&, hessenberg = Eigen::HessenbergDecomposition<Eigen::MatrixXd>(m),
-                work = RowMatrixXd(m, m), U = std::vector<cd>(M * M), lower = std::vector<cd>(M),
-                swapped = std::vector<char>(M), y = std::vector<cd>(M), v = std::vector<cd>(M),
+                work = RowMatrixXd(m, m), H = RowMatrixXd(m, m), iteration = InverseIteration(m), v = std::vector<cd>(M),
                 Q = Eigen::MatrixXd(m, m)](Eigen::Index begin, Eigen::Index end) mutable {
             for (Eigen::Index s = begin; s < end; ++s) {
                 const Eigen::MatrixXd A = Eigen::Map<const RowMatrixXd>(stack + s * m * m, m, m);
                 const Eigen::VectorXd d = balancing(A);
                 hessenberg.compute(d.cwiseInverse().asDiagonal() * A * d.asDiagonal());
-                const Eigen::MatrixXd H = hessenberg.matrixH();
+                H = hessenberg.matrixH();
                 Q = hessenberg.matrixQ();
                 cd* value = values + s * m;
                 work = H;
@@ -225,13 +264,17 @@ void loop_modes(const double* stack, Eigen::Index count, Eigen::Index m, const R
                         for (Eigen::Index j = 0; j < r; ++j) shape[j * m] = 0.0;
                         continue;
                     }
-                    for (Eigen::Index j = 0; j < m; ++j)  // a start vector of its own per index
-                        y[static_cast<std::size_t>(j)] = 1.0 + 0.5 * std::sin(static_cast<double>((i + 1) * (j + 1)));
-                    inverse_iteration(H, value[i], tiny, U, lower, swapped, y);
+                    for (std::size_t j = 0; j < M; ++j) {  // a start vector of its own per index
+                        iteration.yr[j] = 1.0 + 0.5 * std::sin(static_cast<double>(static_cast<std::size_t>(i + 1) * (j + 1)));
+                        iteration.yi[j] = 0.0;
+                    }
+                    (simd_avx2() ? inverse_iteration_avx2 : inverse_iteration_portable)(H.data(), m, value[i].real(),
+                                                                                        value[i].imag(), tiny, iteration);
                     double norm = 0.0;  // v = D Q y, of unit norm
                     for (Eigen::Index a = 0; a < m; ++a) {
                         cd sum = 0.0;
-                        for (Eigen::Index b = 0; b < m; ++b) sum += Q(a, b) * y[static_cast<std::size_t>(b)];
+                        for (Eigen::Index b = 0; b < m; ++b)
+                            sum += Q(a, b) * cd(iteration.yr[static_cast<std::size_t>(b)], iteration.yi[static_cast<std::size_t>(b)]);
                         v[static_cast<std::size_t>(a)] = d[a] * sum;
                         norm += std::norm(v[static_cast<std::size_t>(a)]);
                     }
