@@ -9,9 +9,10 @@ process; the median ratio is the headline). Target (issue 26): <= 10x.
 Campbell: 500 speeds, against the peer a user would write: for each speed the closed-loop matrix built
 in numpy (the continuous plant and controller from amb_fast's model, ``scipy.linalg.expm`` of the
 augmented matrix, the loop closed) and ``numpy.linalg.eigvals``. Target (issue 26): <= 0.2x. The
-Campbell diagram discretises and closes every speed's loop in the core and computes there each pole and,
-for the whirl, its mode's displacement at the bearings (inverse iteration on the Hessenberg form), on the
-core's threads; it does more than the peer (the shapes), and the peer's numpy may use OpenBLAS threads.
+Campbell diagram discretises every speed's plant in the core (the loops closed in numpy, all speeds at
+once) and computes there each pole and, for the whirl, its mode's displacement at the bearings (inverse
+iteration on the Hessenberg form), on the core's threads; it does more than the peer (the shapes). On a
+loaded machine the peer's OpenBLAS threads slow it down: run with OPENBLAS_NUM_THREADS=1 for the fair ratio.
 
 The process first does what users do (a 300x300 matrix product, an eigenvalue problem) and rests half a
 second, so OpenBLAS's threads are in the state a user's process leaves them.
