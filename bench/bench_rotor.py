@@ -18,9 +18,11 @@ like ``unbalance_response``, which runs on one: small matrices gain nothing from
 
 Campbell: 500 speeds, against the peer a user would write: for each speed the closed-loop matrix built
 in numpy (the continuous plant and controller from amb_fast's model, ``scipy.linalg.expm`` of the
-augmented matrix, the loop closed) and ``numpy.linalg.eigvals``. Target (issue 26): <= 0.2x; today's
-Campbell assembles each speed's loop in Python and computes eigenvectors too (for the whirl), so it is
-slower than that peer: the target needs the loop assembled in the core.
+augmented matrix, the loop closed) and ``numpy.linalg.eigvals``. Target (issue 26): <= 0.2x. The
+Campbell diagram discretises every speed's plant in the core (the loops closed in numpy, all speeds at
+once) and computes there each pole and, for the whirl, its mode's displacement at the bearings (inverse
+iteration on the Hessenberg form), on the core's threads; it does more than the peer (the shapes). On a
+loaded machine the peer's OpenBLAS threads slow it down: run with OPENBLAS_NUM_THREADS=1 for the fair ratio.
 
 Flexible rotor: ``FlexibleRotor.example()`` (ROSS's 30-element shaft, 8 bending modes kept in each plane:
 20 coordinates) on ``Rig.paper()``'s chains under the same PID, the same experiment at standstill, against

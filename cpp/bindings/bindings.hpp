@@ -47,3 +47,4 @@ void bind_spectrum(py::module_& m);
 void bind_sweep(py::module_& m);
 void bind_mimo(py::module_& m);
 void bind_nd_loop(py::module_& m);
+void bind_campbell(py::module_& m);

@@ -9,6 +9,7 @@ PYBIND11_MODULE(_core, m) {
     bind_sweep(m);
     bind_mimo(m);
     bind_nd_loop(m);
+    bind_campbell(m);
 
     // Touchdown is an event with a time and a place: amb_fast.TouchdownError carries both.
     py::register_exception_translator([](std::exception_ptr error) {

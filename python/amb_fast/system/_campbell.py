@@ -12,13 +12,14 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 from numpy.typing import ArrayLike
 
+from .. import _core
 from .._equality import ArrayRecord
+from .._linear import split_dead_time
 from .._validate import require
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix, controller_state_space
-from ._model import System, loop_model, plant, sensor_rows
+from ._model import System, plant, sensor_rows
 from ._rotor import RotorRig
 
 
@@ -85,35 +86,34 @@ class Campbell(ArrayRecord):
         return ax
 
 
-def _forward_form(system: System, states: int) -> tuple[np.ndarray, np.ndarray]:
-    """Hermitian forms over the loop's state: ``v^H F v`` is the forward minus backward whirl of the
-    bearing planes' orbits (``|a + j b|^2 - |a - j b|^2 = -4 Im(conj(a) b)`` per bearing, a = x, b = y),
-    ``v^H D v`` their squared amplitude."""
+def _bearing_form(system: System, states: int) -> tuple[np.ndarray, np.ndarray]:
+    """The rows ``R`` (N, states) of each axis' displacement at its bearing plane, and the Hermitian form
+    ``F`` (N, N) over them: ``p^H F p`` (``p = R v``) is the forward minus backward whirl of the bearing
+    planes' orbits (``|a + j b|^2 - |a - j b|^2 = -4 Im(conj(a) b)`` per bearing, a = x, b = y)."""
     mech = system.mechanics()
     _, _, lay = plant(system)
-    d = np.zeros((mech.axes, states))
-    d[:, list(lay.position)] = mech.actuators  # each axis' displacement at its bearing plane
-    F = np.zeros((states, states), dtype=complex)
+    R = np.zeros((mech.axes, states))
+    R[:, list(lay.position)] = mech.actuators
+    F = np.zeros((mech.axes, mech.axes), dtype=complex)
     for j, name in enumerate(mech.names):
         if name.endswith("x") and name[:-1] + "y" in mech.names:
-            a, b = d[j], d[mech.names.index(name[:-1] + "y")]
-            F += 2j * (np.outer(a, b) - np.outer(b, a))
-    return F, d.T @ d
+            k = mech.names.index(name[:-1] + "y")
+            F[j, k], F[k, j] = 2j, -2j
+    return R, F
 
 
-def _whirl(values: np.ndarray, vectors: np.ndarray, F: np.ndarray, D: np.ndarray) -> np.ndarray:
-    """+1 forward, -1 backward, 0 none, per speed and eigenvector: ``values`` (speeds, n), ``vectors``
-    (speeds, n, n) with the eigenvectors in columns.
+def _whirl(values: np.ndarray, shapes: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """+1 forward, -1 backward, 0 none, per speed and pole: ``values`` (speeds, n), ``shapes`` (speeds, N, n)
+    the bearing planes' displacements ``R v`` of each pole's unit eigenvector ``v`` (zero where not needed:
+    a pole on the positive real axis does not whirl).
 
     A repeated pole (x and y alike: any rotor at standstill, the parallel mode at any speed) has no
-    mode shape of its own, only a plane of them; within it the shapes of pure whirl are the eigenvectors
-    of the forward form relative to the amplitude (one forward, one backward), and those are used: for the
-    2x2 pencil ``(Fg, Dg)`` their signs are those of its two eigenvalues, whose product is
-    ``det Fg / det Dg`` and whose sum is ``tr(Dg^-1 Fg)``."""
-    FV, DV = F @ vectors, D @ vectors
-    measure = np.einsum("sij,sij->sj", vectors.conj(), FV).real
-    amplitude = np.einsum("sij,sij->sj", vectors.conj(), DV).real
-    total = np.einsum("sij,sij->sj", vectors.conj(), vectors).real
+    mode shape of its own, only a plane of them (the core's two copies span it); within it the shapes of pure
+    whirl are the eigenvectors of the forward form relative to the amplitude (one forward, one backward), and
+    those are used: for the 2x2 pencil ``(Fg, Dg)`` their signs are those of its two eigenvalues, whose product
+    is ``det Fg / det Dg`` and whose sum is ``tr(Dg^-1 Fg)``."""
+    measure = np.einsum("sim,ij,sjm->sm", shapes.conj(), F, shapes).real
+    amplitude = np.einsum("sim,sim->sm", shapes.conj(), shapes).real
     # For Im s < 0 (the conjugate pole) the same orbit reads the other way round.
     turning = np.sign(np.angle(values))
     whirl = np.sign(np.round(measure / np.maximum(amplitude, 1e-300), 9)) * turning
@@ -123,8 +123,8 @@ def _whirl(values: np.ndarray, vectors: np.ndarray, F: np.ndarray, D: np.ndarray
     speed, k = np.nonzero(close)  # repeated poles come in pairs (x and y)
     if speed.size:
         first, second = order[speed, k], order[speed, k + 1]
-        V = np.stack([vectors[speed, :, first], vectors[speed, :, second]], axis=-1)  # (pairs, n, 2)
-        Dg = np.einsum("pia,ij,pjb->pab", V.conj(), D, V)
+        V = np.stack([shapes[speed, :, first], shapes[speed, :, second]], axis=-1)  # (pairs, N, 2)
+        Dg = np.einsum("pia,pib->pab", V.conj(), V)
         Fg = np.einsum("pia,ij,pjb->pab", V.conj(), F, V)
         Dg, Fg = (Dg + np.conj(np.swapaxes(Dg, 1, 2))) / 2, (Fg + np.conj(np.swapaxes(Fg, 1, 2))) / 2
         det_d, det_f = np.linalg.det(Dg).real, np.linalg.det(Fg).real
@@ -137,35 +137,57 @@ def _whirl(values: np.ndarray, vectors: np.ndarray, F: np.ndarray, D: np.ndarray
         hi = np.where(mixed, 1.0, same) * turning[speed, first]
         lo = np.where(mixed, -1.0, same) * turning[speed, first]
         whirl[speed, first], whirl[speed, second] = hi, lo
-    moving = amplitude > 1e-9 * total  # rotor motion at the bearings
+    moving = amplitude > 1e-9  # rotor motion at the bearings (of a unit eigenvector)
     oscillating = np.abs(np.angle(values)) > 1e-9
     return np.where(moving & oscillating, whirl, 0).astype(int)
 
 
+def _workers(count: int) -> int:
+    """All cores for a diagram of many speeds (a thread costs about one speed's work), one for a few."""
+    return 0 if count >= 32 else 1
+
+
 def loop_stack(rig: RotorRig, controller: ControllerMatrix, speeds: np.ndarray) -> np.ndarray:
-    """The closed loop's matrix at each speed, (speeds, n, n). The continuous plant is affine in the speed
-    (only the gyroscopic term moves), so without dead time the plants are discretised in one batched matrix
-    exponential and the loops closed in one batched product; with a dead time each speed's loop is
-    :func:`loop_model`'s."""
-    if any(axis.dead_time > 0 for axis in rig.axes):
-        return np.stack([loop_model(rig.at_speed(float(W)), controller).M for W in speeds])
+    """The closed loop's matrix at each speed, (speeds, n, n), as :func:`loop_model` makes it (the same states).
+
+    The continuous plant is affine in the speed (only the gyroscopic term moves), so the core discretises
+    every speed (on its threads) from the plant at rest and its gyroscopic rows per rad/s, over the sample
+    and, for a fractional dead time ``delta``, over ``T - delta``: ``G0 = Gamma_u(T - delta)`` and
+    ``G1 = Phi(T - delta) Gamma_u(delta) = Gamma_u(T) - Gamma_u(T - delta)`` (:func:`discrete_plant`'s
+    columns); the command lines and the controller are the same at every speed."""
     A0, B, _ = plant(rig.at_speed(0.0))
     A1 = plant(rig.at_speed(1.0))[0] - A0  # the gyroscopic rows per rad/s
-    n, m = B.shape
+    n, N = A0.shape[0], B.shape[1] // 2
     T = 1.0 / controller.fs
-    augmented = np.zeros((speeds.size, n + m, n + m))
-    augmented[:, :n, :n] = (A0 + speeds[:, None, None] * A1) * T
-    augmented[:, :n, n:] = B * T
-    E = scipy.linalg.expm(augmented)
-    Phi, Gu = E[:, :n, :n], E[:, :n, n + m // 2 :]
+    splits = [split_dead_time(axis.dead_time, controller.fs) for axis in rig.axes]
+    fractions = sorted({f for _, f in splits if f > 0})
+    E = _core.hold_stacks(A0, A1, B[:, N:], [T] + [T - f for f in fractions], speeds, _workers(speeds.size))
+    Gamma = E[:, 0, :, n:]
+    lines = [m + (f > 0) for m, f in splits]
+    size = n + sum(lines)
+    Phi, Gu = np.zeros((speeds.size, size, size)), np.zeros((speeds.size, size, N))
+    Phi[:, :n, :n] = E[:, 0, :, :n]
+    at = n
+    for a, ((whole, f), line) in enumerate(zip(splits, lines)):
+        G0 = E[:, 1 + fractions.index(f), :, n + a] if f > 0 else Gamma[:, :, a]
+        if whole == 0:
+            Gu[:, :n, a] = G0
+        else:
+            Phi[:, :n, at + whole - 1] = G0
+        if f > 0:
+            Phi[:, :n, at + line - 1] = Gamma[:, :, a] - G0
+        if line:
+            Gu[:, at, a] = 1.0  # <axis>.dead1' = u
+            Phi[:, at : at + line, at : at + line] = np.eye(line, k=-1)
+        at += line
     Ac, Bc, Cc, Dc = controller_state_space(controller)
-    S = sensor_rows(rig)
-    c = Ac.shape[0]
-    M = np.empty((speeds.size, n + c, n + c))
-    M[:, :n, :n] = Phi + Gu @ (Dc @ S)
-    M[:, :n, n:] = Gu @ Cc
-    M[:, n:, :n] = Bc @ S
-    M[:, n:, n:] = Ac
+    S = np.zeros((N, size))
+    S[:, :n] = sensor_rows(rig)
+    M = np.empty((speeds.size, size + Ac.shape[0], size + Ac.shape[0]))
+    M[:, :size, :size] = Phi + Gu @ (Dc @ S)
+    M[:, :size, size:] = Gu @ Cc
+    M[:, size:, :size] = Bc @ S
+    M[:, size:, size:] = Ac
     return M
 
 
@@ -182,12 +204,12 @@ def campbell(rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike) -> Ca
     spec = controller_matrix(controller, 4)
     fs = spec.fs
     M = loop_stack(rig, spec, W)
-    F, D = _forward_form(rig, M.shape[1])
-    values, vectors = np.linalg.eig(M)
+    R, F = _bearing_form(rig, M.shape[1])
+    values, shapes = _core.loop_modes(M, R, _workers(W.size))
     order = np.argsort(np.abs(np.angle(values)), axis=1, kind="stable")
     values = np.take_along_axis(values, order, axis=1)
-    vectors = np.take_along_axis(vectors, order[:, None, :], axis=2)
-    whirl = _whirl(values, vectors, F, D)
+    shapes = np.take_along_axis(shapes, order[:, None, :], axis=2)
+    whirl = _whirl(values, shapes, F)
     z = values
     s = fs * np.log(z.astype(complex))
     frequency = np.abs(s.imag) / (2 * np.pi)

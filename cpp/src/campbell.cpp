@@ -1,0 +1,293 @@
+// A Campbell diagram's linear algebra (campbell.hpp): one speed per task, on the core's threads.
+#include "amb_fast/campbell.hpp"
+
+#include <unsupported/Eigen/MatrixFunctions>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+#include "amb_fast/blocks.hpp"
+#include "amb_fast/errors.hpp"
+#include "amb_fast/inline.hpp"
+#include "amb_fast/lanes.hpp"
+#include "amb_fast/steady.hpp"
+
+namespace amb_fast {
+
+using cd = std::complex<double>;
+
+void hold_stacks(const RowMatrixXd& A0, const RowMatrixXd& A1, const RowMatrixXd& B, const std::vector<double>& holds,
+                 const double* values, Eigen::Index count, int workers, double* out) {
+    const Eigen::Index n = A0.rows(), k = B.cols(), H = static_cast<Eigen::Index>(holds.size());
+    require(A0.cols() == n && A1.rows() == n && A1.cols() == n && B.rows() == n, "A0, A1, B", n,
+            "n x n, n x n and n x k");
+    for (const double h : holds) require(std::isfinite(h) && h > 0.0, "hold", h, "> 0 (s)");
+    in_blocks(count, 16, workers, [&] {
+        return [&, augmented = Eigen::MatrixXd(n + k, n + k), E = Eigen::MatrixXd(n + k, n + k)](
+                   Eigen::Index begin, Eigen::Index end) mutable {
+            for (Eigen::Index s = begin; s < end; ++s)
+                for (Eigen::Index j = 0; j < H; ++j) {
+                    const double h = holds[static_cast<std::size_t>(j)];
+                    augmented.setZero();
+                    augmented.topLeftCorner(n, n) = (A0 + values[s] * A1) * h;
+                    augmented.topRightCorner(n, k) = B * h;
+                    E = augmented.exp();
+                    Eigen::Map<RowMatrixXd>(out + (s * H + j) * n * (n + k), n, n + k) = E.topRows(n);
+                }
+        };
+    });
+}
+
+namespace {
+
+// The eigenvalues of the upper Hessenberg matrix a (n x n, row-major, overwritten) by Francis double-shift QR
+// steps on the active window only (EISPACK's hqr): no Schur form, no vectors. A complex pair comes as
+// (x + j z, x - j z), z > 0.
+void hessenberg_eigenvalues(double* a, Eigen::Index n, cd* values) {
+    const auto at = [&](Eigen::Index i, Eigen::Index j) -> double& { return a[i * n + j]; };
+    const auto sign = [](double x, double y) { return y >= 0.0 ? std::abs(x) : -std::abs(x); };
+    const double eps = std::numeric_limits<double>::epsilon();
+    double norm = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i)
+        for (Eigen::Index j = std::max<Eigen::Index>(i - 1, 0); j < n; ++j) norm += std::abs(at(i, j));
+    Eigen::Index nn = n - 1, l = 0;
+    double t = 0.0;  // the exceptional shifts' sum
+    while (nn >= 0) {
+        int its = 0;
+        do {
+            for (l = nn; l >= 1; --l) {  // a negligible subdiagonal entry splits the window
+                double s = std::abs(at(l - 1, l - 1)) + std::abs(at(l, l));
+                if (s == 0.0) s = norm;
+                if (std::abs(at(l, l - 1)) <= eps * s) {
+                    at(l, l - 1) = 0.0;
+                    break;
+                }
+            }
+            if (l < 0) l = 0;
+            double x = at(nn, nn);
+            if (l == nn) {  // one root
+                values[nn--] = x + t;
+                continue;
+            }
+            double y = at(nn - 1, nn - 1), w = at(nn, nn - 1) * at(nn - 1, nn);
+            if (l == nn - 1) {  // two roots
+                const double p = 0.5 * (y - x), q = p * p + w, z = std::sqrt(std::abs(q));
+                x += t;
+                if (q >= 0.0) {
+                    const double zz = p + sign(z, p);
+                    values[nn - 1] = values[nn] = x + zz;
+                    if (zz != 0.0) values[nn] = x - w / zz;
+                } else {
+                    values[nn - 1] = cd(x + p, z);
+                    values[nn] = cd(x + p, -z);
+                }
+                nn -= 2;
+                continue;
+            }
+            if (its == 60) throw std::runtime_error("eigenvalues did not converge");
+            if (its > 0 && its % 10 == 0) {  // an exceptional shift
+                t += x;
+                for (Eigen::Index i = 0; i <= nn; ++i) at(i, i) -= x;
+                const double s = std::abs(at(nn, nn - 1)) + std::abs(at(nn - 1, nn - 2));
+                y = x = 0.75 * s;
+                w = -0.4375 * s * s;
+            }
+            ++its;
+            Eigen::Index m = nn - 2;
+            double p = 0.0, q = 0.0, r = 0.0, z = 0.0;
+            for (; m >= l; --m) {  // where two small subdiagonal entries let the step start
+                z = at(m, m);
+                r = x - z;
+                double s = y - z;
+                p = (r * s - w) / at(m + 1, m) + at(m, m + 1);
+                q = at(m + 1, m + 1) - z - r - s;
+                r = at(m + 2, m + 1);
+                s = std::abs(p) + std::abs(q) + std::abs(r);
+                p /= s, q /= s, r /= s;
+                if (m == l) break;
+                const double u = std::abs(at(m, m - 1)) * (std::abs(q) + std::abs(r));
+                const double v = std::abs(p) * (std::abs(at(m - 1, m - 1)) + std::abs(z) + std::abs(at(m + 1, m + 1)));
+                if (u <= eps * v) break;
+            }
+            for (Eigen::Index i = m + 2; i <= nn; ++i) {
+                at(i, i - 2) = 0.0;
+                if (i != m + 2) at(i, i - 3) = 0.0;
+            }
+            for (Eigen::Index k = m; k <= nn - 1; ++k) {  // the double-shift step, a 3 x 3 reflector at a time
+                if (k != m) {
+                    p = at(k, k - 1);
+                    q = at(k + 1, k - 1);
+                    r = k != nn - 1 ? at(k + 2, k - 1) : 0.0;
+                    x = std::abs(p) + std::abs(q) + std::abs(r);
+                    if (x != 0.0) p /= x, q /= x, r /= x;
+                }
+                const double s = sign(std::sqrt(p * p + q * q + r * r), p);
+                if (s == 0.0) continue;
+                if (k == m) {
+                    if (l != m) at(k, k - 1) = -at(k, k - 1);
+                } else {
+                    at(k, k - 1) = -s * x;
+                }
+                p += s;
+                x = p / s, y = q / s, z = r / s;
+                q /= p, r /= p;
+                for (Eigen::Index j = k; j <= nn; ++j) {
+                    p = at(k, j) + q * at(k + 1, j);
+                    if (k != nn - 1) {
+                        p += r * at(k + 2, j);
+                        at(k + 2, j) -= p * z;
+                    }
+                    at(k + 1, j) -= p * y;
+                    at(k, j) -= p * x;
+                }
+                const Eigen::Index last = std::min(nn, k + 3);
+                for (Eigen::Index i = l; i <= last; ++i) {
+                    p = x * at(i, k) + y * at(i, k + 1);
+                    if (k != nn - 1) {
+                        p += z * at(i, k + 2);
+                        at(i, k + 2) -= p * r;
+                    }
+                    at(i, k + 1) -= p * q;
+                    at(i, k) -= p;
+                }
+            }
+        } while (l < nn - 1);
+    }
+}
+
+// Inverse iteration's storage: H - lambda I's LU factors, real and imaginary parts apart (row-major; the
+// row operations' multipliers and swaps), and the vector y.
+struct InverseIteration {
+    explicit InverseIteration(Eigen::Index n)
+        : ur(static_cast<std::size_t>(n * n)), ui(ur.size()), lr(static_cast<std::size_t>(n)), li(lr.size()),
+          swapped(lr.size()), yr(lr.size()), yi(lr.size()) {}
+    std::vector<double> ur, ui, lr, li, swapped, yr, yi;
+};
+
+// y with H y = lambda y, |y| = 1, by two steps of inverse iteration from the start vector y (H upper
+// Hessenberg, row-major; LU of H - lambda I pivoting between neighbouring rows; a zero pivot made tiny, as
+// LAPACK's hsein). Elementwise loops over real arrays (vectorised where the processor can; no reduction is
+// reordered, so the same digits either way).
+AMB_FAST_ALWAYS_INLINE void inverse_iteration_kernel(const double* H, Eigen::Index n, double lambda_r,
+                                                     double lambda_i, double tiny, InverseIteration& w) {
+    double *ur = w.ur.data(), *ui = w.ui.data(), *yr = w.yr.data(), *yi = w.yi.data();
+    for (Eigen::Index i = 0; i < n; ++i) {
+        for (Eigen::Index j = std::max<Eigen::Index>(i - 1, 0); j < n; ++j) ur[i * n + j] = H[i * n + j], ui[i * n + j] = 0.0;
+        ur[i * n + i] -= lambda_r;
+        ui[i * n + i] = -lambda_i;
+    }
+    for (Eigen::Index j = 0; j + 1 < n; ++j) {
+        double *ar = ur + j * n, *ai = ui + j * n, *br = ur + (j + 1) * n, *bi = ui + (j + 1) * n;
+        const bool swap = br[j] * br[j] + bi[j] * bi[j] > ar[j] * ar[j] + ai[j] * ai[j];
+        w.swapped[static_cast<std::size_t>(j)] = swap;
+        if (swap)
+            for (Eigen::Index c = j; c < n; ++c) std::swap(ar[c], br[c]), std::swap(ai[c], bi[c]);
+        if (ar[j] == 0.0 && ai[j] == 0.0) ar[j] = tiny;
+        const double norm = ar[j] * ar[j] + ai[j] * ai[j];
+        const double mr = (br[j] * ar[j] + bi[j] * ai[j]) / norm, mi = (bi[j] * ar[j] - br[j] * ai[j]) / norm;
+        w.lr[static_cast<std::size_t>(j)] = mr, w.li[static_cast<std::size_t>(j)] = mi;
+        for (Eigen::Index c = j + 1; c < n; ++c) {
+            const double xr = ar[c], xi = ai[c];
+            br[c] -= mr * xr - mi * xi;
+            bi[c] -= mr * xi + mi * xr;
+        }
+    }
+    if (ur[n * n - 1] == 0.0 && ui[n * n - 1] == 0.0) ur[n * n - 1] = tiny;
+    for (int step = 0; step < 2; ++step) {
+        for (Eigen::Index j = 0; j + 1 < n; ++j) {
+            const auto J = static_cast<std::size_t>(j);
+            if (w.swapped[J] != 0.0) std::swap(yr[j], yr[j + 1]), std::swap(yi[j], yi[j + 1]);
+            yr[j + 1] -= w.lr[J] * yr[j] - w.li[J] * yi[j];
+            yi[j + 1] -= w.lr[J] * yi[j] + w.li[J] * yr[j];
+        }
+        for (Eigen::Index i = n - 1; i >= 0; --i) {
+            const double *rr = ur + i * n, *ri = ui + i * n;
+            double sr = yr[i], si = yi[i];
+            for (Eigen::Index c = i + 1; c < n; ++c) {
+                sr -= rr[c] * yr[c] - ri[c] * yi[c];
+                si -= rr[c] * yi[c] + ri[c] * yr[c];
+            }
+            const double norm = rr[i] * rr[i] + ri[i] * ri[i];
+            yr[i] = (sr * rr[i] + si * ri[i]) / norm;
+            yi[i] = (si * rr[i] - sr * ri[i]) / norm;
+        }
+        double norm = 0.0;
+        for (Eigen::Index i = 0; i < n; ++i) norm += yr[i] * yr[i] + yi[i] * yi[i];
+        norm = 1.0 / std::sqrt(norm);
+        for (Eigen::Index i = 0; i < n; ++i) yr[i] *= norm, yi[i] *= norm;
+    }
+}
+
+void inverse_iteration_portable(const double* H, Eigen::Index n, double lr, double li, double tiny,
+                                InverseIteration& w) {
+    inverse_iteration_kernel(H, n, lr, li, tiny, w);
+}
+#if AMB_FAST_WIDE_LANES
+__attribute__((target("avx2"))) void inverse_iteration_avx2(const double* H, Eigen::Index n, double lr, double li,
+                                                            double tiny, InverseIteration& w) {
+    inverse_iteration_kernel(H, n, lr, li, tiny, w);
+}
+#else
+constexpr auto inverse_iteration_avx2 = inverse_iteration_portable;
+#endif
+
+}  // namespace
+
+void loop_modes(const double* stack, Eigen::Index count, Eigen::Index m, const RowMatrixXd& R, int workers,
+                cd* values, cd* shapes) {
+    require(R.cols() == m, "R", R.cols(), "m columns (one per state)");
+    const Eigen::Index r = R.rows();
+    const auto M = static_cast<std::size_t>(m);
+    in_blocks(count, 8, workers, [&] {
+        return [&, hessenberg = Eigen::HessenbergDecomposition<Eigen::MatrixXd>(m),
+                work = RowMatrixXd(m, m), H = RowMatrixXd(m, m), iteration = InverseIteration(m), v = std::vector<cd>(M),
+                Q = Eigen::MatrixXd(m, m)](Eigen::Index begin, Eigen::Index end) mutable {
+            for (Eigen::Index s = begin; s < end; ++s) {
+                const Eigen::MatrixXd A = Eigen::Map<const RowMatrixXd>(stack + s * m * m, m, m);
+                const Eigen::VectorXd d = balancing(A);
+                hessenberg.compute(d.cwiseInverse().asDiagonal() * A * d.asDiagonal());
+                H = hessenberg.matrixH();
+                Q = hessenberg.matrixQ();
+                cd* value = values + s * m;
+                work = H;
+                hessenberg_eigenvalues(work.data(), m, value);
+                const double tiny = std::numeric_limits<double>::epsilon() * std::max(H.cwiseAbs().maxCoeff(), 1e-300);
+                for (Eigen::Index i = 0; i < m; ++i) {
+                    cd* shape = shapes + s * r * m + i;  // shape[j * m]: row j
+                    const bool conjugate = value[i].imag() < 0.0 && i > 0 && value[i - 1] == std::conj(value[i]);
+                    if (conjugate) {  // the conjugate eigenvalue's vector is the conjugate vector
+                        for (Eigen::Index j = 0; j < r; ++j) shape[j * m] = std::conj(shape[j * m - 1]);
+                        continue;
+                    }
+                    if (value[i].imag() == 0.0 && value[i].real() > 0.0) {
+                        for (Eigen::Index j = 0; j < r; ++j) shape[j * m] = 0.0;
+                        continue;
+                    }
+                    for (std::size_t j = 0; j < M; ++j) {  // a start vector of its own per index
+                        iteration.yr[j] = 1.0 + 0.5 * std::sin(static_cast<double>(static_cast<std::size_t>(i + 1) * (j + 1)));
+                        iteration.yi[j] = 0.0;
+                    }
+                    (simd_avx2() ? inverse_iteration_avx2 : inverse_iteration_portable)(H.data(), m, value[i].real(),
+                                                                                        value[i].imag(), tiny, iteration);
+                    double norm = 0.0;  // v = D Q y, of unit norm
+                    for (Eigen::Index a = 0; a < m; ++a) {
+                        cd sum = 0.0;
+                        for (Eigen::Index b = 0; b < m; ++b)
+                            sum += Q(a, b) * cd(iteration.yr[static_cast<std::size_t>(b)], iteration.yi[static_cast<std::size_t>(b)]);
+                        v[static_cast<std::size_t>(a)] = d[a] * sum;
+                        norm += std::norm(v[static_cast<std::size_t>(a)]);
+                    }
+                    norm = std::sqrt(norm);
+                    for (Eigen::Index j = 0; j < r; ++j) {
+                        cd sum = 0.0;
+                        for (Eigen::Index a = 0; a < m; ++a) sum += R(j, a) * v[static_cast<std::size_t>(a)];
+                        shape[j * m] = sum / norm;
+                    }
+                }
+            }
+        };
+    });
+}
+
+}  // namespace amb_fast

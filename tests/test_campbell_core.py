@@ -1,0 +1,106 @@
+"""The core's Campbell linear algebra against numpy/scipy: the sampled loops of a plant affine in the speed
+(``_core.sampled_loops``) and each loop's poles with their shapes at chosen rows (``_core.loop_modes``)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+import amb_fast as af
+from amb_fast import _core
+from amb_fast.system import _campbell, _control, _model
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_hold_stacks_are_scipys_expm(workers: int) -> None:
+    rng = np.random.default_rng(1)
+    n, k = 7, 2
+    A0, A1 = rng.standard_normal((n, n)) * 300.0, rng.standard_normal((n, n))
+    B = rng.standard_normal((n, k))
+    speeds = np.linspace(-500.0, 2000.0, 37)
+    holds = [2.5e-4, 1.7e-4]
+    got = _core.hold_stacks(A0, A1, B, holds, speeds, workers)
+    assert got.shape == (speeds.size, 2, n, n + k)
+    for E, W in zip(got, speeds):
+        for j, h in enumerate(holds):
+            aug = np.zeros((n + k, n + k))
+            aug[:n, :n], aug[:n, n:] = (A0 + W * A1) * h, B * h
+            expected = scipy.linalg.expm(aug)[:n]
+            np.testing.assert_allclose(E[j], expected, rtol=0, atol=1e-13 * np.abs(expected).max())
+
+
+def test_hold_stacks_refuse_mismatched_shapes_and_holds() -> None:
+    with pytest.raises(ValueError, match="A0, A1, B"):
+        _core.hold_stacks(np.eye(3), np.eye(2), np.ones((3, 1)), [1e-3], [0.0])
+    with pytest.raises(ValueError, match="hold"):
+        _core.hold_stacks(np.eye(3), np.eye(3), np.ones((3, 1)), [0.0], [0.0])
+
+
+def test_loop_stack_is_loop_model_with_any_dead_times() -> None:
+    """Every speed's loop as loop_model makes it: axes without dead time, with a fraction of a sample only,
+    whole samples only and both (4 kHz: T = 0.25 ms), so the core's holds over T - delta are checked."""
+    axes = [replace(af.Rig.paper(), dead_time=d) for d in (0.0, 1e-4, 5e-4, 6e-4)]
+    rig = af.RotorRig(af.RotorRig.example().rotor, axes)
+    spec = _control.controller_matrix(af.RotorRig.example_controller(), 4)
+    speeds = np.array([0.0, 2500.0])
+    stack = _campbell.loop_stack(rig, spec, speeds)
+    for M, W in zip(stack, speeds):
+        expected = _model.loop_model(rig.at_speed(W), spec).M
+        np.testing.assert_allclose(M, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
+
+
+def matched(values: np.ndarray, expected: np.ndarray) -> float:
+    """The largest distance from one of ``values`` to the nearest of ``expected``."""
+    return float(np.max(np.min(np.abs(values[:, None] - expected[None, :]), axis=1)))
+
+
+def test_loop_modes_poles_and_shapes_are_numpys() -> None:
+    """Every pole is numpy's; for a simple pole the shape R v is numpy's eigenvector's up to a unit phase; on
+    the positive real axis no shape (zero)."""
+    rig, pid = af.RotorRig.example(), af.RotorRig.example_controller()
+    stack = _campbell.loop_stack(rig, _control.controller_matrix(pid, 4), np.array([0.0, 700.0, 4000.0]))
+    rng = np.random.default_rng(2)
+    stack = np.concatenate([stack, rng.standard_normal((4, stack.shape[1], stack.shape[1]))])
+    R = rng.standard_normal((3, stack.shape[1]))
+    values, shapes = _core.loop_modes(stack, R, 2)
+    for M, z, P in zip(stack, values, shapes):
+        expected, vectors = np.linalg.eig(M)
+        assert matched(z, expected) < 1e-11 * max(1.0, np.abs(expected).max())
+        for i, pole in enumerate(z):
+            if pole.imag == 0 and pole.real > 0:
+                assert np.all(P[:, i] == 0)
+                continue
+            gaps = np.abs(expected - pole)
+            j = int(np.argmin(gaps))
+            if np.sort(gaps)[1] < 1e-6:  # repeated: a plane of vectors
+                continue
+            reference = R @ vectors[:, j]
+            phase = np.vdot(reference, P[:, i]) / np.vdot(reference, reference)
+            assert abs(abs(phase) - 1.0) < 1e-8
+            np.testing.assert_allclose(P[:, i], phase * reference, rtol=0, atol=1e-8 * np.abs(reference).max())
+
+
+def test_a_repeated_poles_copies_span_its_plane() -> None:
+    """A block-diagonal (A, A): each pole twice; the two copies' vectors (R = I: the vectors themselves) are
+    eigenvectors and independent, so whirl can be read in the plane they span."""
+    rng = np.random.default_rng(3)
+    A = rng.standard_normal((4, 4))
+    M = scipy.linalg.block_diag(A, A)
+    values, shapes = _core.loop_modes(M[None], np.eye(8))
+    z, V = values[0], shapes[0]
+    for pole in np.linalg.eigvals(A):
+        if pole.imag == 0 and pole.real > 0:
+            continue
+        copies = np.nonzero(np.abs(z - pole) < 1e-9)[0]
+        assert copies.size == 2
+        pair = V[:, copies]
+        np.testing.assert_allclose(M @ pair, pair * z[copies], rtol=0, atol=1e-9)
+        assert np.linalg.svd(pair, compute_uv=False)[1] > 1e-3  # independent: a plane, not one line
+
+
+def test_loop_modes_refuse_rows_of_another_size() -> None:
+    with pytest.raises(ValueError, match="R"):
+        _core.loop_modes(np.eye(3)[None], np.ones((2, 4)))
