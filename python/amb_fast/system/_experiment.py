@@ -206,9 +206,8 @@ def estimate(
     experiment), complex, unscaled DFT bins; the displacements are the probes' readings (the structure's
     ``readout`` is applied here). ``H = F Y^-1`` per line with F, Y the period means; its standard errors
     from the linearised ``dH = (dF - H dY) Y^-1`` of every period."""
-    Yp = np.ascontiguousarray(mechanics.readout @ displacement_lines)
     require(force_lines.shape[0] >= 2, "periods", force_lines.shape[0], ">= 2 (standard errors need at least two)")
-    H, receptance, F, Y, var_re, var_im = _core.estimate_nxn(force_lines, Yp)
+    H, receptance, F, Y, var_re, var_im = _core.estimate_nxn(force_lines, displacement_lines, mechanics.readout)
     actual = H - known_dynamics(mechanics, freq)
     w = (2 * np.pi * freq)[:, None, None]
     k, c = actual.real, actual.imag / w
@@ -284,5 +283,5 @@ def run_experiment(
                                          settle_periods=settle, periods=periods, seeds=seeds[first : first + step],
                                          steady_start=start == "steady", bins=harmonics)
              for first in range(0, N, step)]  # fmt: skip
-    Fp, Yp = (np.concatenate([part[i] for part in parts], axis=-1) for i in (0, 1))
+    Fp, Yp = parts[0] if len(parts) == 1 else (np.concatenate([part[i] for part in parts], axis=-1) for i in (0, 1))
     return estimate(Fp, Yp, harmonics * excitation.f0, mech, excitation.period_samples, window)
