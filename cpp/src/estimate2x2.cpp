@@ -80,7 +80,8 @@ namespace {
 // estimate_nxn with N x N matrices of a fixed size (1 to 4: no allocation, unrolled) or N = Dynamic.
 template <int N>
 void estimate_lines(const cd* force_lines, const cd* displacement_lines, const double* readout, Eigen::Index periods,
-                    Eigen::Index lines, Eigen::Index n, Estimate2x2& est) {
+                    Eigen::Index lines, Eigen::Index axes, Estimate2x2& est) {
+    const Eigen::Index n = N == Eigen::Dynamic ? axes : N;  // a constant for a fixed size: loops unrolled
     using Matrix = Eigen::Matrix<cd, N, N, N == 1 ? Eigen::ColMajor : Eigen::RowMajor>;
     using Map = Eigen::Map<const Matrix>;
     const double mean = 1.0 / static_cast<double>(periods), scale = 1.0 / static_cast<double>(periods * (periods - 1));
@@ -93,12 +94,16 @@ void estimate_lines(const cd* force_lines, const cd* displacement_lines, const d
     const auto displacement = [&](Eigen::Index period, Eigen::Index j) {
         return readout ? Map(read[static_cast<std::size_t>(period)].data(), n, n) : at(displacement_lines, period, j);
     };
-    // out = a b with every sum in order (the digits of Eigen's lazy product of dynamic size).
+    // out = a b with every sum in order (the digits of Eigen's lazy product of dynamic size), the complex
+    // products written out (finite numbers: the library's product adds a NaN check to each).
     const auto product = [n](const auto& a, const auto& b, Matrix& out) {
+        const auto times = [](cd x, cd y) {
+            return cd(x.real() * y.real() - x.imag() * y.imag(), x.real() * y.imag() + x.imag() * y.real());
+        };
         for (Eigen::Index r = 0; r < n; ++r)
             for (Eigen::Index c = 0; c < n; ++c) {
-                cd sum = a(r, 0) * b(0, c);
-                for (Eigen::Index s = 1; s < n; ++s) sum += a(r, s) * b(s, c);
+                cd sum = times(a(r, 0), b(0, c));
+                for (Eigen::Index s = 1; s < n; ++s) sum += times(a(r, s), b(s, c));
                 out(r, c) = sum;
             }
     };

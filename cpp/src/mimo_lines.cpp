@@ -310,13 +310,14 @@ void SteadyLines::draw_block() {
     for (Eigen::Index period = 0; period < P; ++period) {
         for (Eigen::Index j = 0; j < q; ++j) {  // V: (Re, Im) per line and probe
             const double sigma = std::sqrt(0.5 * static_cast<double>(s.L)) * s.model.sensor_noise[j];
-            NormalStream& draw = probe_[static_cast<std::size_t>(j)];
+            NormalStream::Local draw(probe_[static_cast<std::size_t>(j)]);
             for (Eigen::Index k = 0; k < B; ++k) {
                 double re = 0.0, im = 0.0;
                 if (sigma > 0.0) re = draw(), im = draw();
                 V_(2 * (k * q + j), period) = sigma * re;
                 V_(2 * (k * q + j) + 1, period) = sigma * im;
             }
+            draw.commit();
         }
         rest_->fill(draws_.col(period).data(), n, 1.0);
     }
@@ -332,7 +333,8 @@ void SteadyLines::draw_block() {
     next_ = 0;
 }
 
-void SteadyLines::next(cd* force_lines, cd* displacement_lines) {
+void SteadyLines::next(cd* force_lines, cd* displacement_lines, const LineLayout& force_layout,
+                       const LineLayout& displacement_layout) {
     if (next_ == drawn_) draw_block();
     const LineSolves& s = *solves_;
     const Eigen::Index period = next_++;
@@ -346,22 +348,23 @@ void SteadyLines::next(cd* force_lines, cd* displacement_lines) {
             for (Eigen::Index j = 0; j < q; ++j)
                 y += s.G(i, k * m + p + j) * cd(v[2 * (k * q + j)], v[2 * (k * q + j) + 1]);
             zero_if_finite += 0.0 * y.real() + 0.0 * y.imag();
-            displacement_lines[k * q + i] = y;
+            displacement_lines[displacement_layout.at(k, i, q)] = y;
         }
     if (zero_if_finite != 0.0) throw std::overflow_error("the line spectra became non-finite: the loop is unstable");
     // The force transducers' white noise: N(0, L sigma^2 / 2) in the real and in the imaginary part of
     // every line, one stream per channel, line by line.
     for (Eigen::Index c = 0; c < p; ++c) {
         const double sigma = std::sqrt(0.5 * static_cast<double>(s.L)) * s.model.force_noise[c];
-        NormalStream& draw = force_[static_cast<std::size_t>(c)];
+        NormalStream::Local draw(force_[static_cast<std::size_t>(c)]);
         for (Eigen::Index k = 0; k < B; ++k) {
             cd value = clean_force_(k, c);
             if (sigma > 0.0) {
                 const double re = draw(), im = draw();
                 value += cd(sigma * re, sigma * im);
             }
-            force_lines[k * p + c] = value;
+            force_lines[force_layout.at(k, c, p)] = value;
         }
+        draw.commit();
     }
 }
 
@@ -389,7 +392,7 @@ void steady_lines(const MimoModel& model, const double* const* period_force, Eig
     for (std::size_t t = 0; t < parts.size(); ++t) {
         const std::vector<Eigen::Index>& forces = parts[t].forces;
         const std::vector<Eigen::Index>& probes = parts[t].probes;
-        const auto pp = static_cast<Eigen::Index>(forces.size()), qq = static_cast<Eigen::Index>(probes.size());
+        const auto pp = static_cast<Eigen::Index>(forces.size());
         const auto solves = LineSolves::shared(parts.size() == 1 ? model : parts[t].model(model), L, bins);
         std::vector<SteadyLines> draws;
         draws.reserve(static_cast<std::size_t>(K));
@@ -402,22 +405,13 @@ void steady_lines(const MimoModel& model, const double* const* period_force, Eig
             draws.emplace_back(solves, NoiseSources{probes, forces, static_cast<Eigen::Index>(t)});
             draws.back().start(force.data(), seeds[static_cast<std::size_t>(l)], periods);
         }
-        // Experiment l's period at f[l * B * pp], y[l * B * qq].
-        std::vector<cd> f(static_cast<std::size_t>(K * B * pp)), y(static_cast<std::size_t>(K * B * qq));
-        const auto at = [](Eigen::Index i) { return static_cast<std::size_t>(i); };
-        for (Eigen::Index period = 0; period < periods; ++period) {
-            for (Eigen::Index l = 0; l < K; ++l) draws[at(l)].next(&f[at(l * B * pp)], &y[at(l * B * qq)]);
-            for (Eigen::Index k = 0; k < B; ++k) {
-                for (Eigen::Index c = 0; c < pp; ++c) {
-                    cd* out = force_lines + ((period * B + k) * p + forces[at(c)]) * K;
-                    for (Eigen::Index l = 0; l < K; ++l) out[l] = f[at((l * B + k) * pp + c)];
-                }
-                for (Eigen::Index j = 0; j < qq; ++j) {
-                    cd* out = displacement_lines + ((period * B + k) * q + probes[at(j)]) * K;
-                    for (Eigen::Index l = 0; l < K; ++l) out[l] = y[at((l * B + k) * qq + j)];
-                }
-            }
-        }
+        // Line k, channel c of experiment l's period at ((period * B + k) * channels + channel) * K + l.
+        const LineLayout force_layout{p * K, K, forces.data()}, displacement_layout{q * K, K, probes.data()};
+        for (Eigen::Index period = 0; period < periods; ++period)
+            for (Eigen::Index l = 0; l < K; ++l)
+                draws[static_cast<std::size_t>(l)].next(force_lines + period * B * p * K + l,
+                                                        displacement_lines + period * B * q * K + l, force_layout,
+                                                        displacement_layout);
     }
 }
 }  // namespace

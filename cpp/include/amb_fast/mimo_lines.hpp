@@ -69,6 +69,16 @@ struct NoiseSources {
     Eigen::Index part = 0;
 };
 
+// Where SteadyLines::next() puts line k's channel c of `channels`: at k * line_stride + channel[c] *
+// channel_stride (by default line-major, k * channels + c).
+struct LineLayout {
+    Eigen::Index line_stride = 0, channel_stride = 1;  // line_stride 0: channels
+    const Eigen::Index* channel = nullptr;             // nullptr: c
+    Eigen::Index at(Eigen::Index k, Eigen::Index c, Eigen::Index channels) const {
+        return k * (line_stride ? line_stride : channels) + (channel ? channel[c] : c) * channel_stride;
+    }
+};
+
 // The drawn line spectra of one experiment at a time, period by period (memory O(lines), however
 // many periods): the per-line solves once per model (LineSolves, shareable), then start() per experiment
 // and next() per period. The periods are drawn in blocks of up to `block` (their noise's products as
@@ -85,9 +95,10 @@ class SteadyLines {
     // drawn from its stationary distribution.
     void start(const double* period_force, std::uint64_t seed, Eigen::Index periods);
     // The next period's line spectra: force_lines[line * p + channel] (the recorded, transduced force with
-    // the transducer's noise), displacement_lines[line * q + probe]. At most `periods` calls after start.
-    // Throws std::overflow_error when they are not finite (an unstable loop).
-    void next(std::complex<double>* force_lines, std::complex<double>* displacement_lines);
+    // the transducer's noise), displacement_lines[line * q + probe] (or where the layouts say). At most
+    // `periods` calls after start. Throws std::overflow_error when they are not finite (an unstable loop).
+    void next(std::complex<double>* force_lines, std::complex<double>* displacement_lines,
+              const LineLayout& force_layout = {}, const LineLayout& displacement_layout = {});
     static constexpr Eigen::Index block = 16;
     const std::vector<Eigen::Index>& bins() const { return solves_->bins; }
 
