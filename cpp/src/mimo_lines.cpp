@@ -396,14 +396,15 @@ void steady_lines(const MimoModel& model, const double* const* period_force, Eig
         const auto solves = LineSolves::shared(parts.size() == 1 ? model : parts[t].model(model), L, bins);
         std::vector<SteadyLines> draws;
         draws.reserve(static_cast<std::size_t>(K));
-        std::vector<double> force(static_cast<std::size_t>(L * pp));
+        std::vector<double> force(parts.size() > 1 ? static_cast<std::size_t>(L * pp) : 0);
         for (Eigen::Index l = 0; l < K; ++l) {
-            for (Eigen::Index k = 0; k < L; ++k)
+            for (Eigen::Index k = 0; parts.size() > 1 && k < L; ++k)  // one part: every force channel, in order
                 for (Eigen::Index c = 0; c < pp; ++c)
                     force[static_cast<std::size_t>(k * pp + c)] =
                         period_force[l][k * p + forces[static_cast<std::size_t>(c)]];
             draws.emplace_back(solves, NoiseSources{probes, forces, static_cast<Eigen::Index>(t)});
-            draws.back().start(force.data(), seeds[static_cast<std::size_t>(l)], periods);
+            draws.back().start(parts.size() > 1 ? force.data() : period_force[l], seeds[static_cast<std::size_t>(l)],
+                               periods);
         }
         // Line k, channel c of experiment l's period at ((period * B + k) * channels + channel) * K + l.
         const LineLayout force_layout{p * K, K, forces.data()}, displacement_layout{q * K, K, probes.data()};

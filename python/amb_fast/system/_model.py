@@ -384,4 +384,6 @@ def known_dynamics(mechanics: Mechanics, freq: np.ndarray) -> np.ndarray:
     planes: what ``k``, ``c`` remove from ``H``; no mass loading: paper eq. 9), shape (len(freq), N, N)."""
     w = (2 * np.pi * np.asarray(freq, dtype=float))[:, None, None]
     Mb, Gb = mechanics.at_bearings(mechanics.mass), mechanics.at_bearings(mechanics.gyroscopic)
-    return (-(w**2) * Mb + 1j * w * mechanics.speed * Gb) @ np.linalg.inv(mechanics.frame)
+    dynamics = -(w**2) * Mb + 1j * w * mechanics.speed * Gb
+    # One product over all the lines' rows (a stacked product calls BLAS once per line).
+    return (dynamics.reshape(-1, Mb.shape[1]) @ np.linalg.inv(mechanics.frame)).reshape(dynamics.shape)
