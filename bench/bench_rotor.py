@@ -4,7 +4,9 @@ against a numpy loop of the same linear algebra.
 Experiment: ``RotorRig.example()`` (every axis ``Rig.paper()``'s chain, noise on) under its example PID,
 four experiments of 10 periods of the 1-200 Hz multisine from the steady state, against the one-axis
 paper experiment (``Rig.paper()``, ``PID.paper()``, 10 periods), in interleaved pairs (CPU time of this
-process; the median ratio is the headline). Target (issue 26): <= 10x.
+process; the median ratio is the headline). Target (issue 26): <= 10x. Every call runs the same loop, so
+the core draws from the per-line solves it kept from the call before (as repeated experiments on one
+rig do); a first call on a new loop (another speed) also pays for them and for building the loop.
 
 ISO sensitivity (issue 27): ``measure_sensitivity`` on the rotor's four axes (four experiments of 10
 periods of a 1-200 Hz multisine, 1 um rms, added to each sensor's signal in turn, probe noise on) against

@@ -168,3 +168,51 @@ def test_drawn_spectra_refuse_an_unstable_loop() -> None:
     with pytest.raises(OverflowError, match="unstable"):
         _core.mimo_line_experiments(**args, period_forces=excitation_pair(sphs), settle_periods=0, periods=3,
                                     seeds=[1, 2], steady_start=True, bins=sphs.harmonics)  # fmt: skip
+
+
+@pytest.mark.parametrize("n", [1, 3, 4, 5])
+def test_estimate_nxn_with_a_readout_equals_numpy(rng, n: int) -> None:
+    """The N x N estimate with the structure's readout applied in the core (fixed-size matrices up to 4
+    axes, dynamic beyond) equals numpy's estimate of ``readout @ Y``."""
+    periods, lines = 6, 23
+    shape = (periods, lines, n, n)
+    Fp = rng.normal(size=shape) + 1j * rng.normal(size=shape) + 3 * np.eye(n)
+    Yp = 1e-5 * (rng.normal(size=shape) + 1j * rng.normal(size=shape) + 4 * np.eye(n))
+    readout = np.eye(n) + 0.1 * rng.normal(size=(n, n))
+    for got, want in zip(_core.estimate_nxn(Fp, Yp, readout), numpy_estimate(Fp, readout @ Yp)):
+        assert got.shape == (lines, n, n)
+        np.testing.assert_allclose(got, want, rtol=1e-11, atol=1e-14 * np.max(np.abs(want)))
+    with pytest.raises(ValueError, match="readout"):
+        _core.estimate_nxn(Fp, Yp, np.eye(n + 1))
+
+
+def test_drawn_rotor_lines_do_not_depend_on_the_shared_solves() -> None:
+    """The N experiments drawn in lock step from one set of per-line solves (kept for the next call with
+    a bitwise equal model) equal each experiment drawn alone, call after call; a model differing only in
+    its probe noise is solved afresh (other lines), and its lines are the same after the cache moved on."""
+    from amb_fast.system._control import controller_matrix
+    from amb_fast.system._experiment import core_args, hadamard_forces
+    from amb_fast.system._model import loop_model as system_loop
+
+    rig, sphs = af.RotorRig.example(speed=1000.0), af.schroeder_multisine(f0=20.0, f_max=400.0)
+    args = core_args(system_loop(rig, controller_matrix(af.RotorRig.example_controller(), 4)), rig, outputs=4)
+    forces = hadamard_forces(sphs.samples, 4)
+
+    def lines(model: dict, first: int = 0, count: int = 4) -> tuple[np.ndarray, np.ndarray]:
+        return _core.mimo_line_experiments(**model, period_forces=np.ascontiguousarray(forces[first : first + count]),
+                                           settle_periods=0, periods=3, seeds=[11, 12, 13, 14][first : first + count],
+                                           steady_start=True, bins=sphs.harmonics)  # fmt: skip
+
+    together = lines(args)
+    for got, want in zip(lines(args), together):
+        np.testing.assert_array_equal(got, want)
+    for e in range(4):
+        for got, want in zip(lines(args, e, 1), together):
+            np.testing.assert_array_equal(got[..., 0], want[..., e])
+    noisier = dict(args, sensor_noise=2 * args["sensor_noise"])
+    first = lines(noisier)
+    assert not np.array_equal(first[1], together[1])
+    for scale in (1.1, 1.2, 1.3, 1.4, 1.5):  # more models than the cache keeps
+        lines(dict(args, force_noise=scale * args["force_noise"]), 0, 1)
+    for got, want in zip(lines(noisier), first):
+        np.testing.assert_array_equal(got, want)

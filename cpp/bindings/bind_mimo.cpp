@@ -7,6 +7,7 @@
 #include <pybind11/numpy.h>
 
 #include <array>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -166,9 +167,13 @@ void bind_mimo(py::module_& m) {
     m.def(
         "estimate_nxn",
         [](const py::array_t<std::complex<double>, py::array::c_style | py::array::forcecast>& force_lines,
-           const py::array_t<std::complex<double>, py::array::c_style | py::array::forcecast>& displacement_lines) {
+           const py::array_t<std::complex<double>, py::array::c_style | py::array::forcecast>& displacement_lines,
+           const std::optional<py::array_t<double, py::array::c_style | py::array::forcecast>>& readout) {
             if (force_lines.ndim() != 4 || force_lines.shape(2) != force_lines.shape(3))
                 throw std::invalid_argument("force_lines must have shape (periods, lines, N, N)");
+            if (readout && (readout->ndim() != 2 || readout->shape(0) != force_lines.shape(2) ||
+                            readout->shape(1) != force_lines.shape(2)))
+                throw std::invalid_argument("readout must have shape (N, N)");
             for (py::ssize_t d = 0; d < 4; ++d)
                 if (displacement_lines.ndim() != 4 || displacement_lines.shape(d) != force_lines.shape(d))
                     throw std::invalid_argument("displacement_lines must have the shape of force_lines");
@@ -176,7 +181,8 @@ void bind_mimo(py::module_& m) {
             const auto B = static_cast<Eigen::Index>(force_lines.shape(1));
             const auto N = static_cast<Eigen::Index>(force_lines.shape(2));
             const std::complex<double>*fl = force_lines.data(), *dl = displacement_lines.data();
-            const Estimate2x2 est = interruptible([&] { return estimate_nxn(fl, dl, P, B, N); });
+            const double* read = readout ? readout->data() : nullptr;
+            const Estimate2x2 est = interruptible([&] { return estimate_nxn(fl, dl, P, B, N, read); });
             auto complex_array = [&](const std::vector<std::complex<double>>& x) {
                 py::array_t<std::complex<double>> a({B, N, N});
                 std::copy(x.begin(), x.end(), a.mutable_data());
@@ -190,10 +196,10 @@ void bind_mimo(py::module_& m) {
             return py::make_tuple(complex_array(est.H), complex_array(est.receptance), complex_array(est.force),
                                   complex_array(est.displacement), real_array(est.var_re), real_array(est.var_im));
         },
-        py::arg("force_lines"), py::arg("displacement_lines"),
+        py::arg("force_lines"), py::arg("displacement_lines"), py::arg("readout") = py::none(),
         "estimate_2x2 for N axes: from the per-period line spectra (periods, lines, N channels, N experiments) "
         "returns H = F Y^-1, its inverse, the period means F and Y (lines, N, N), and the variances of Re H and "
-        "Im H (lines, N, N).");
+        "Im H (lines, N, N). readout (N, N): the displacements are readout times the given ones.");
     m.def(
         "mimo_line_sweep",
         [](const std::vector<Eigen::MatrixXd>& M, const std::vector<Eigen::MatrixXd>& Bf,

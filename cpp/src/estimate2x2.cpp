@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <stdexcept>
+#include <type_traits>
 
 #include "amb_fast/errors.hpp"
 
@@ -75,45 +76,70 @@ Estimate2x2 estimate_2x2(const std::complex<double>* force_lines, const std::com
     return est;
 }
 
-Estimate2x2 estimate_nxn(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines,
-                         Eigen::Index periods, Eigen::Index lines, Eigen::Index n) {
-    require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
-    require(n >= 1, "axes", n, ">= 1");
-    using Matrix = Eigen::Matrix<cd, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+namespace {
+// estimate_nxn with N x N matrices of a fixed size (1 to 4: no allocation, unrolled) or N = Dynamic.
+template <int N>
+void estimate_lines(const cd* force_lines, const cd* displacement_lines, const double* readout, Eigen::Index periods,
+                    Eigen::Index lines, Eigen::Index axes, Estimate2x2& est) {
+    const Eigen::Index n = N == Eigen::Dynamic ? axes : N;  // a constant for a fixed size: loops unrolled
+    using Matrix = Eigen::Matrix<cd, N, N, N == 1 ? Eigen::ColMajor : Eigen::RowMajor>;
     using Map = Eigen::Map<const Matrix>;
-    Estimate2x2 est;
-    est.lines = lines;
-    est.periods = periods;
-    const auto size = static_cast<std::size_t>(n * n * lines);
-    for (auto* v : {&est.H, &est.receptance, &est.force, &est.displacement}) v->resize(size);
-    est.var_re.resize(size);
-    est.var_im.resize(size);
     const double mean = 1.0 / static_cast<double>(periods), scale = 1.0 / static_cast<double>(periods * (periods - 1));
     // [period][line][channel][experiment]: one N x N matrix per period and line, row-major.
     const auto at = [&](const cd* x, Eigen::Index period, Eigen::Index j) {
         return Map(x + (period * lines + j) * n * n, n, n);
     };
-    Matrix F(n, n), Y(n, n), dF(n, n), dH(n, n);
-    Eigen::MatrixXd re(n, n), im(n, n);
+    // The displacements read through `readout` (row-major, real), per period of the line.
+    std::vector<Matrix> read(readout ? static_cast<std::size_t>(periods) : 0, Matrix(n, n));
+    const auto displacement = [&](Eigen::Index period, Eigen::Index j) {
+        return readout ? Map(read[static_cast<std::size_t>(period)].data(), n, n) : at(displacement_lines, period, j);
+    };
+    // out = a b with every sum in order (the digits of Eigen's lazy product of dynamic size), the complex
+    // products written out (finite numbers: the library's product adds a NaN check to each).
+    const auto product = [n](const auto& a, const auto& b, Matrix& out) {
+        const auto times = [](cd x, cd y) {
+            return cd(x.real() * y.real() - x.imag() * y.imag(), x.real() * y.imag() + x.imag() * y.real());
+        };
+        for (Eigen::Index r = 0; r < n; ++r)
+            for (Eigen::Index c = 0; c < n; ++c) {
+                cd sum = times(a(r, 0), b(0, c));
+                for (Eigen::Index s = 1; s < n; ++s) sum += times(a(r, s), b(s, c));
+                out(r, c) = sum;
+            }
+    };
+    Matrix F(n, n), Y(n, n), H(n, n), dY(n, n), HdY(n, n), dF(n, n), dH(n, n);
+    Eigen::Matrix<double, N, N> re(n, n), im(n, n);
     for (Eigen::Index j = 0; j < lines; ++j) {
+        for (Eigen::Index period = 0; readout && period < periods; ++period) {
+            const Map y = at(displacement_lines, period, j);
+            Matrix& out = read[static_cast<std::size_t>(period)];
+            for (Eigen::Index r = 0; r < n; ++r)
+                for (Eigen::Index c = 0; c < n; ++c) {
+                    cd sum = 0.0;
+                    for (Eigen::Index s = 0; s < n; ++s) sum += readout[r * n + s] * y(s, c);
+                    out(r, c) = sum;
+                }
+        }
         F.setZero();
         Y.setZero();
         for (Eigen::Index period = 0; period < periods; ++period) {
             F += at(force_lines, period, j);
-            Y += at(displacement_lines, period, j);
+            Y += displacement(period, j);
         }
         F *= mean;
         Y *= mean;
         if (!F.allFinite() || !Y.allFinite()) throw std::invalid_argument("force and displacement must be finite");
         const Eigen::PartialPivLU<Matrix> lu(Y);
         const Matrix Yinv = lu.inverse();
-        const Matrix H = F * Yinv;
+        product(F, Yinv, H);
         const Matrix receptance = Eigen::PartialPivLU<Matrix>(H).inverse();
         re.setZero();
         im.setZero();
         for (Eigen::Index period = 0; period < periods; ++period) {
-            dF = (at(force_lines, period, j) - F) - H * (at(displacement_lines, period, j) - Y);
-            dH = dF * Yinv;
+            dY = displacement(period, j) - Y;
+            product(H, dY, HdY);
+            dF = (at(force_lines, period, j) - F) - HdY;
+            product(dF, Yinv, dH);
             re += dH.real().cwiseAbs2();
             im += dH.imag().cwiseAbs2();
         }
@@ -123,6 +149,30 @@ Estimate2x2 estimate_nxn(const std::complex<double>* force_lines, const std::com
                 est.H[k] = H(r, c), est.receptance[k] = receptance(r, c), est.force[k] = F(r, c);
                 est.displacement[k] = Y(r, c), est.var_re[k] = re(r, c) * scale, est.var_im[k] = im(r, c) * scale;
             }
+    }
+}
+}  // namespace
+
+Estimate2x2 estimate_nxn(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines,
+                         Eigen::Index periods, Eigen::Index lines, Eigen::Index n, const double* readout) {
+    require(periods >= 2, "periods", periods, ">= 2 (standard errors need at least two)");
+    require(n >= 1, "axes", n, ">= 1");
+    Estimate2x2 est;
+    est.lines = lines;
+    est.periods = periods;
+    const auto size = static_cast<std::size_t>(n * n * lines);
+    for (auto* v : {&est.H, &est.receptance, &est.force, &est.displacement}) v->resize(size);
+    est.var_re.resize(size);
+    est.var_im.resize(size);
+    const auto run = [&](auto fixed) {
+        estimate_lines<decltype(fixed)::value>(force_lines, displacement_lines, readout, periods, lines, n, est);
+    };
+    switch (n) {
+        case 1: run(std::integral_constant<int, 1>{}); break;
+        case 2: run(std::integral_constant<int, 2>{}); break;
+        case 3: run(std::integral_constant<int, 3>{}); break;
+        case 4: run(std::integral_constant<int, 4>{}); break;
+        default: run(std::integral_constant<int, Eigen::Dynamic>{});
     }
     return est;
 }

@@ -220,7 +220,7 @@ def estimate_2x2(
     force_lines: ArrayLike, displacement_lines: ArrayLike
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...
 def estimate_nxn(
-    force_lines: ArrayLike, displacement_lines: ArrayLike
+    force_lines: ArrayLike, displacement_lines: ArrayLike, readout: ArrayLike | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...
 
 # N axes (amb_fast.system._model): the one assembler of the linear loop. Keywords: the structure's mass,

@@ -23,8 +23,10 @@ Estimate2x2 estimate_2x2(const std::complex<double>* force_lines, const std::com
 
 // The same estimate for N axes (N experiments, N channels): per line F, Y (N x N, [channel][experiment])
 // the period means, H = F Y^-1 by LU with partial pivoting, and the variances from the linearised
-// dH = (dF - H dY) Y^-1 of every period. Matrices per line, row-major N x N; `lines` of them.
+// dH = (dF - H dY) Y^-1 of every period. Matrices per line, row-major N x N; `lines` of them. With a
+// readout (N x N, real, row-major) the displacements are readout times the given ones (the structure's
+// reported displacements from its probes' readings).
 Estimate2x2 estimate_nxn(const std::complex<double>* force_lines, const std::complex<double>* displacement_lines,
-                         Eigen::Index periods, Eigen::Index lines, Eigen::Index n);
+                         Eigen::Index periods, Eigen::Index lines, Eigen::Index n, const double* readout = nullptr);
 
 }  // namespace amb_fast

@@ -16,6 +16,7 @@
 #include <Eigen/Dense>
 #include <complex>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -38,12 +39,28 @@ void mimo_line_experiments(const MimoModel& model, const double* const* period_f
                            bool steady_start, const std::vector<Eigen::Index>& bins, std::complex<double>* force_lines,
                            std::complex<double>* displacement_lines);
 
-// The drawn line spectra of one experiment at a time, period by period (memory O(lines), however
-// many periods): the per-line solves once per model, then start() per experiment and next() per period.
-// The periods are drawn in blocks of up to `block` (their noise's products as matrix products, not one
-// matrix-vector product per period), next() hands them out one by one. The numbers depend only on the
-// model, the period force, the seed and the period's index (a block draws each stream in the order
-// single periods would).
+// The per-line solves of one model, period and set of bins (see the constructor in mimo_lines.cpp):
+// everything the drawn spectra need that does not depend on the excitation or the seed, read-only once
+// made, so any number of experiments (and threads) draw from one.
+struct LineSolves {
+    // bins strictly between 0 and L/2.
+    LineSolves(const MimoModel& model, Eigen::Index L, std::vector<Eigen::Index> bins);
+    // The solves of this model, L and bins: a recent call's (any thread's) if its model was bitwise the
+    // same, else made and kept. Repeated experiments on one loop, the N experiments of one run and the
+    // identical parts of an uncoupled rig are solved once (the same numbers: the solves are deterministic).
+    static std::shared_ptr<const LineSolves> shared(const MimoModel& model, Eigen::Index L,
+                                                    const std::vector<Eigen::Index>& bins);
+    std::size_t bytes() const;
+
+    MimoModel model;
+    Eigen::Index L;
+    std::vector<Eigen::Index> bins;
+    std::vector<std::complex<double>> z;  // e^{jw} per line
+    Eigen::MatrixXd T_inverse, ML, WL, residual_root, CRz_re, CRz_im, Xn;
+    Eigen::MatrixXcd G;
+    Eigen::MatrixXd root;  // of the state's stationary noise covariance
+};
+
 // Which of the run's noise sources (stream_seed's j) a drawn model's probes and force channels draw from,
 // and which part of a larger model it is (independent_parts): by default probe j and channel c
 // themselves, part 0.
@@ -52,33 +69,46 @@ struct NoiseSources {
     Eigen::Index part = 0;
 };
 
+// Where SteadyLines::next() puts line k's channel c of `channels`: at k * line_stride + channel[c] *
+// channel_stride (by default line-major, k * channels + c).
+struct LineLayout {
+    Eigen::Index line_stride = 0, channel_stride = 1;  // line_stride 0: channels
+    const Eigen::Index* channel = nullptr;             // nullptr: c
+    Eigen::Index at(Eigen::Index k, Eigen::Index c, Eigen::Index channels) const {
+        return k * (line_stride ? line_stride : channels) + (channel ? channel[c] : c) * channel_stride;
+    }
+};
+
+// The drawn line spectra of one experiment at a time, period by period (memory O(lines), however
+// many periods): the per-line solves once per model (LineSolves, shareable), then start() per experiment
+// and next() per period. The periods are drawn in blocks of up to `block` (their noise's products as
+// matrix products, not one matrix-vector product per period), next() hands them out one by one. The
+// numbers depend only on the model, the period force, the seed and the period's index (a block draws
+// each stream in the order single periods would).
 class SteadyLines {
   public:
     // bins strictly between 0 and L/2.
     SteadyLines(const MimoModel& model, Eigen::Index L, std::vector<Eigen::Index> bins, NoiseSources sources = {});
+    SteadyLines(std::shared_ptr<const LineSolves> solves, NoiseSources sources = {});
     // A new experiment of `periods` periods: period_force (L x p, sample-major, finite: the callers check
     // it) repeated, noise from seed; the state starts in its periodic steady state, the noise-driven part
     // drawn from its stationary distribution.
     void start(const double* period_force, std::uint64_t seed, Eigen::Index periods);
     // The next period's line spectra: force_lines[line * p + channel] (the recorded, transduced force with
-    // the transducer's noise), displacement_lines[line * q + probe]. At most `periods` calls after start.
-    // Throws std::overflow_error when they are not finite (an unstable loop).
-    void next(std::complex<double>* force_lines, std::complex<double>* displacement_lines);
+    // the transducer's noise), displacement_lines[line * q + probe] (or where the layouts say). At most
+    // `periods` calls after start. Throws std::overflow_error when they are not finite (an unstable loop).
+    void next(std::complex<double>* force_lines, std::complex<double>* displacement_lines,
+              const LineLayout& force_layout = {}, const LineLayout& displacement_layout = {});
     static constexpr Eigen::Index block = 16;
-    const std::vector<Eigen::Index>& bins() const { return bins_; }
+    const std::vector<Eigen::Index>& bins() const { return solves_->bins; }
 
   private:
     void draw_block();
 
-    MimoModel model_;
+    std::shared_ptr<const LineSolves> solves_;
     NoiseSources sources_;
-    Eigen::Index L_;
-    std::vector<Eigen::Index> bins_;
-    LineTransform transform_;              // the excitation's lines
-    std::vector<std::complex<double>> z_;  // e^{jw} per line
-    Eigen::MatrixXd T_inverse_, ML_, WL_, residual_root_, CRz_re_, CRz_im_, Xn_;
-    Eigen::MatrixXcd G_, clean_force_;
-    Eigen::MatrixXd root_;                     // of the state's stationary noise covariance
+    std::optional<LineTransform> transform_;  // the excitation's lines (made when first needed)
+    Eigen::MatrixXcd clean_force_;
     Eigen::VectorXcd det_;                     // the probes' periodic response to the forces
     std::optional<NormalStream> rest_;         // the state's line-free part
     std::vector<NormalStream> probe_, force_;  // per probe, per force channel

@@ -273,11 +273,13 @@ def estimate(
     ``readout`` is applied here). ``H = F Y^-1`` per line with F, Y the period means; its standard errors
     from the linearised ``dH = (dF - H dY) Y^-1`` of every period."""
     N = mechanics.axes
-    as_read = np.array_equal(mechanics.readout, np.eye(N))  # the probes' readings as they are: no product
-    Yp = displacement_lines if as_read else np.ascontiguousarray(mechanics.readout @ displacement_lines)
     require(force_lines.shape[0] >= 2, "periods", force_lines.shape[0], ">= 2 (standard errors need at least two)")
-    # Two axes: the core's closed-form 2x2 (a seventh of the general solve's time; the same to rounding).
-    H, receptance, F, Y, var_re, var_im = (_core.estimate_2x2 if N == 2 else _core.estimate_nxn)(force_lines, Yp)
+    if N == 2:  # the core's closed-form 2x2 (a seventh of the general solve's time; the same to rounding)
+        as_read = np.array_equal(mechanics.readout, np.eye(N))  # the probes' readings as they are: no product
+        Yp = displacement_lines if as_read else np.ascontiguousarray(mechanics.readout @ displacement_lines)
+        H, receptance, F, Y, var_re, var_im = _core.estimate_2x2(force_lines, Yp)
+    else:  # the readout applied in the core
+        H, receptance, F, Y, var_re, var_im = _core.estimate_nxn(force_lines, displacement_lines, mechanics.readout)
     k, c, k_std, c_std = coefficients(H, var_re, var_im, freq, mechanics)
     amplitude = 2.0 / period
     return EstimateN(freq=freq, H=H, receptance=receptance, k=k, c=c, k_smooth=median_lines(k, median_window),
@@ -301,8 +303,10 @@ _known: dict[tuple, np.ndarray] = {}
 def _known_dynamics(mechanics: Mechanics, freq: np.ndarray) -> np.ndarray:
     """:func:`known_dynamics`, read-only, kept per structure and lines: repeated experiments and a sweep's
     points over a process or a gain share them (the key costs a twentieth of making them)."""
-    parts = (mechanics.mass, mechanics.gyroscopic, mechanics.actuators, mechanics.probes, mechanics.readout, freq)
-    key = (mechanics.coordinates, mechanics.axes, mechanics.speed, b"".join(a.tobytes() for a in parts))
+    parts = (mechanics.mass, mechanics.gyroscopic, mechanics.actuators, mechanics.probes, mechanics.readout, freq,
+             mechanics.elastic, mechanics.elastic_damping)  # a flexible structure's bending too  # fmt: skip
+    key = (mechanics.coordinates, mechanics.axes, mechanics.speed,
+           b"".join(b"-" if a is None else a.tobytes() for a in parts))  # fmt: skip
     known = _known.get(key)
     if known is None:
         if len(_known) >= 64:
@@ -330,6 +334,7 @@ def experiment_forces(excitation: Multisine, n: int) -> np.ndarray:
     forces.flags.writeable = False
     _last_forces = (samples.copy(), forces)
     return forces
+
 
 
 def experiment_seeds(seed: int | None, n: int) -> list[int]:
@@ -406,7 +411,7 @@ def run_experiment(
                                          settle_periods=settle, periods=periods, seeds=seeds[first : first + step],
                                          steady_start=start == "steady", bins=harmonics)
              for first in range(0, N, step)]  # fmt: skip
-    Fp, Yp = (np.concatenate([part[i] for part in parts], axis=-1) for i in (0, 1))
+    Fp, Yp = parts[0] if len(parts) == 1 else (np.concatenate([part[i] for part in parts], axis=-1) for i in (0, 1))
     if exciter == "shaker":
         return estimate(Fp, Yp, harmonics * excitation.f0, mech, excitation.period_samples, window)
     est = estimate(*amb_lines(system, spec.fs, Fp, Yp), harmonics * excitation.f0, mech, excitation.period_samples,

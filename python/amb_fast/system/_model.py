@@ -353,4 +353,7 @@ def known_dynamics(mechanics: Mechanics, freq: np.ndarray) -> np.ndarray:
     eq. 9), shape (len(freq), N, N)."""
     dynamics = mechanics.dynamic_stiffness(freq)
     frame = mechanics.frame
-    return dynamics if np.array_equal(frame, np.eye(len(frame))) else dynamics @ np.linalg.inv(frame)  # I: no product
+    if np.array_equal(frame, np.eye(len(frame))):  # the identity: no product
+        return dynamics
+    # One product over all the lines' rows (a stacked product calls BLAS once per line).
+    return (dynamics.reshape(-1, dynamics.shape[-1]) @ np.linalg.inv(frame)).reshape(dynamics.shape)
