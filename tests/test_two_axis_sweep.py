@@ -114,10 +114,16 @@ def test_each_point_loop_is_built_once() -> None:
     coupled = ta.TwoAxisRig(x=af.Rig.paper(), y=af.Rig.paper(), kxy=2e3, kyx=-2e3)
     kxy = np.linspace(0.0, 4e3, 100) + 0.123  # fresh points
     _model._loop_model.cache_clear()
-    result = ta.sweep(coupled, af.PID.paper(), af.schroeder_multisine(f0=20.0, f_max=100.0), grid="zip", kxy=kxy,
-                      kyx=-kxy, periods=2, seed=1, progress=False)  # fmt: skip
+    real, assembled = af._core.nd_loops, []
+    af._core.nd_loops = lambda points, workers: assembled.append(len(points)) or real(points, workers)
+    try:
+        result = ta.sweep(coupled, af.PID.paper(), af.schroeder_multisine(f0=20.0, f_max=100.0), grid="zip",
+                          kxy=kxy, kyx=-kxy, periods=2, seed=1, progress=False)  # fmt: skip
+    finally:
+        af._core.nd_loops = real
     assert result.stable.all()
-    assert _model._loop_model.cache_info().misses == kxy.size
+    assert sum(assembled) == kxy.size  # each point's loop assembled once, in the core's batched calls
+    assert _model._loop_model.cache_info().misses == 0  # and not again one by one
 
 
 def test_a_stable_point_whose_spectra_overflow_is_flagged_not_fatal() -> None:

@@ -336,7 +336,6 @@ def experiment_forces(excitation: Multisine, n: int) -> np.ndarray:
     return forces
 
 
-
 def experiment_seeds(seed: int | None, n: int) -> list[int]:
     """The N experiments' seeds: the run's, then one of its own per further experiment (two axes: the seeds
     the two-axis experiment has always used)."""

@@ -40,7 +40,7 @@ from ._experiment import (
     run_experiment,
     settle_for,
 )
-from ._model import System, loop_model
+from ._model import System, loop_models
 
 _AXIS_FIELDS = tuple(f.name for f in fields(Rig) if f.name not in ("force_law", "substeps", "mass"))
 _GAINS = ("kp", "ki", "kd", "derivative_cutoff")
@@ -255,9 +255,10 @@ def _core_sweep(
 ) -> Iterator[tuple[int, tuple[np.ndarray, ...] | None]]:  # fmt: skip
     """Two-axis points in one call of the core on ``workers`` threads: each stable point's index and its
     (k, c, k_std, c_std, receptance) as :func:`run_experiment` makes them, bit for bit (an unstable point
-    is not run; None for a point whose spectra overflowed). The loops are built here, each once (a call's points outnumber loop_model's cache); their
-    poles come from the core in a stack per loop size, the numbers with which run_experiment checks one."""
-    loops = [loop_model(*m) for m in models]
+    is not run; None for a point whose spectra overflowed). The loops are assembled here, each once, in one call
+    of the core on ``workers`` threads (a call's points outnumber loop_model's cache); their poles come from
+    the core in a stack per loop size, the numbers with which run_experiment checks one."""
+    loops = loop_models(models, workers)
     poles: list[np.ndarray] = [np.empty(0)] * len(models)
     sizes: dict[int, list[int]] = {}
     for j, loop in enumerate(loops):
