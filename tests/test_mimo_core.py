@@ -191,12 +191,12 @@ def test_drawn_rotor_lines_do_not_depend_on_the_shared_solves() -> None:
     a bitwise equal model) equal each experiment drawn alone, call after call; a model differing only in
     its probe noise is solved afresh (other lines), and its lines are the same after the cache moved on."""
     from amb_fast.system._control import controller_matrix
-    from amb_fast.system._experiment import core_args, hadamard_forces
+    from amb_fast.system._experiment import core_args, experiment_forces
     from amb_fast.system._model import loop_model as system_loop
 
     rig, sphs = af.RotorRig.example(speed=1000.0), af.schroeder_multisine(f0=20.0, f_max=400.0)
     args = core_args(system_loop(rig, controller_matrix(af.RotorRig.example_controller(), 4)), rig, outputs=4)
-    forces = hadamard_forces(sphs.samples, 4)
+    forces = experiment_forces(sphs, 4)
 
     def lines(model: dict, first: int = 0, count: int = 4) -> tuple[np.ndarray, np.ndarray]:
         return _core.mimo_line_experiments(**model, period_forces=np.ascontiguousarray(forces[first : first + count]),
