@@ -4,7 +4,7 @@ From the steady state both draw their recorded periods' line spectra directly (e
 docs/model.md "Drawing the spectra" and "Two axes"). The two-axis experiment draws two experiments on a
 loop of twice the states, with two probes and two force channels; the coupling changes its cost only
 through the loop's size, as a coupled row (a seal-like process, misaligned probes, cross feedback: 16
-states against 14) shows beside the paper's uncoupled rig. The target is a ratio <= 2.5.
+states against 14) shows beside the paper's uncoupled rig. The target is a ratio <= 2.0 (issue 26; it was 2.5).
 
 The headline ratio is the median over interleaved pairs (one one-axis call, then one two-axis call, in
 CPU time of this process): both sides of a pair see the same machine, where medians of separate blocks
@@ -70,7 +70,7 @@ def main() -> None:
         t1, t2 = timer(one, repeats), timer(two, repeats)
         measured[f"one-axis paper experiment, 10 periods ({clock}, ms)"] = t1
         measured[f"two-axis paper experiment, 2 x 10 periods ({clock}, ms)"] = t2
-        ratios[f"two-axis / one-axis ({clock}; target <= 2.5)"] = t2 / t1
+        ratios[f"two-axis / one-axis ({clock}; target <= 2.0)"] = t2 / t1
         if clock == "cpu":
             t3 = timer(coupled, repeats)
             measured["two-axis coupled experiment, 2 x 10 periods (cpu, ms)"] = t3
@@ -82,7 +82,7 @@ def main() -> None:
         middle = time.process_time()
         two()
         pairs.append((time.process_time() - middle) / (middle - start))
-    ratios["two-axis / one-axis, interleaved pairs (cpu; median; target <= 2.5)"] = float(np.median(pairs))
+    ratios["two-axis / one-axis, interleaved pairs (cpu; median; target <= 2.0)"] = float(np.median(pairs))
 
     shifts = iter(range(10**6))
 
