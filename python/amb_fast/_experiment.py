@@ -365,7 +365,7 @@ def identify(
     require((whole - start) // period >= 2, "periods after settling", (whole - start) // period,
             ">= 2 (standard errors need at least two)")  # fmt: skip
     clearance = optional_positive("clearance", clearance, "m")
-    harmonics = _lines(force[start:], period, f0, fs, f_max, lines, offset=start)
+    harmonics = excited_lines(force[start:], period, f0, fs, f_max, lines, offset=start)
     # A few periods' force spectra: the harmonics it excites beyond the chosen lines (lines= or f_max=), which
     # are neither estimated nor noise, and whether it repeats with the period at all (a wrong fs or f0).
     spectra = _checks.period_spectra(force[start:], period)
@@ -412,7 +412,7 @@ def identify(
     return _estimate(raw, harmonics, unexcited, f0, meta=meta, weak=weak)
 
 
-def _lines(
+def excited_lines(
     force: np.ndarray, period: int, f0: float, fs: float, f_max: float | None, lines, offset: int = 0
 ) -> np.ndarray:  # noqa: ANN001, E501
     top = period // 2 - 1 if period % 2 == 0 else period // 2  # highest harmonic below Nyquist

@@ -49,7 +49,7 @@ def points_per_call(count: int, threads: int, bytes_per_point: int, progress: bo
     return min(size, max(32 * threads, -(-count // 20))) if progress else size
 
 
-def _grid(values: dict[str, ArrayLike], grid: str) -> tuple[dict, dict]:
+def sweep_grid(values: dict[str, ArrayLike], grid: str) -> tuple[dict, dict]:
     require(grid in ("product", "zip"), "grid", grid, "'product' or 'zip'")
     axes = {}
     for name, given in values.items():
@@ -223,7 +223,7 @@ _STATUS_NAMES = np.array(STATUS_NAMES)
 _CORE_FIELDS = ("H", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std", "unexcited_displacement", "status")
 
 
-def _progress_bar(progress: bool | None, total: int):  # noqa: ANN202
+def progress_bar(progress: bool | None, total: int):  # noqa: ANN202
     if progress is None:
         progress = sys.stderr.isatty()
     if not progress:
@@ -351,7 +351,7 @@ def sweep(
     if base_controller is not None:
         require(excitation.fs == base_controller.fs, "excitation.fs", excitation.fs,
                 f"equal to the controller's fs ({base_controller.fs} Hz)")  # fmt: skip
-    axes_values, points = _grid(axes, grid)
+    axes_values, points = sweep_grid(axes, grid)
     if factory is None:
         _check_names(base_rig, base_controller, list(points))  # type: ignore[arg-type]
     periods = integer("periods", periods, 2)
@@ -367,7 +367,7 @@ def sweep(
             "a concurrent.futures.Executor (with submit)")  # fmt: skip
     require(progress in (None, True, False), "progress", progress, "True, False or None")
     size = integer("chunk_size", chunk_size, 1) if chunk_size is not None else 0
-    bar = _progress_bar(progress, n)
+    bar = progress_bar(progress, n)
     if not size and executor is None:
         size = points_per_call(n, threads, 72 * excitation.harmonics.size, bar is not None)
     elif not size:  # equal work per worker: a multiple of `threads` chunks, up to eight each, of at least 32 points

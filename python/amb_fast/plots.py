@@ -31,7 +31,7 @@ FENCE = 3.0  # interquartile ranges beyond the quartiles where a damping value c
 DECADE = 10.0  # how much larger than the rest the lowest lines must reach for a symmetric-log damping axis
 
 
-def _pyplot() -> Any:
+def pyplot_module() -> Any:
     """matplotlib.pyplot, on the Agg backend unless one was chosen; a clear error without matplotlib."""
     try:
         import matplotlib
@@ -44,7 +44,7 @@ def _pyplot() -> Any:
 
 
 def _figure(rows: int, height: float = 3.0) -> tuple[Figure, np.ndarray]:
-    fig, axes = _pyplot().subplots(rows, 1, figsize=(7.0, height * rows), sharex=True, squeeze=False)
+    fig, axes = pyplot_module().subplots(rows, 1, figsize=(7.0, height * rows), sharex=True, squeeze=False)
     return fig, axes[:, 0]
 
 
@@ -170,7 +170,7 @@ def plot_coefficients2(estimate: EstimateN, *, smoothed: bool = False, effective
     c = estimate.c_smooth if smoothed else estimate.c
     names = estimate.axes
     entries = [(i, j) for i in range(len(names)) for j in range(len(names))]
-    fig, axes = _pyplot().subplots(2, len(entries), figsize=(3.5 * len(entries), 6), sharex=True, squeeze=False)
+    fig, axes = pyplot_module().subplots(2, len(entries), figsize=(3.5 * len(entries), 6), sharex=True, squeeze=False)
     for col, (i, j) in enumerate(entries):
         for row, (values, std, unit, name) in enumerate(((k, estimate.k_std, "N/m", "k"),
                                                          (c, estimate.c_std, "N s/m", "c"))):  # fmt: skip
@@ -392,7 +392,7 @@ def plot_coefficients_n(
                 f"(K_eff, C_eff), each of shape {estimate.k.shape} (lines, N, N) at estimate.freq")  # fmt: skip
     columns = N if grid else len(entries)
     rows = 2 * (N if grid else 1)
-    fig, axes = _pyplot().subplots(rows, columns, figsize=(3.2 * columns, 2.0 * rows), sharex=True, squeeze=False)
+    fig, axes = pyplot_module().subplots(rows, columns, figsize=(3.2 * columns, 2.0 * rows), sharex=True, squeeze=False)
     f = estimate.freq
     k, c = (estimate.k_smooth, estimate.c_smooth) if smoothed else (estimate.k, estimate.c)
     for cell in axes.ravel():

@@ -25,6 +25,28 @@ if TYPE_CHECKING:
     from ..system import EstimateN
 
 ESTIMATE_SUFFIXES = (".csv", ".nc")
+
+
+class EstimateKind:
+    """How a file holds an estimate of another kind (the N-axis model's, registered by ``amb_fast.system``: this
+    lower layer never imports it): its CSV's first line, its NetCDF ``amb_fast_kind``, and its readers."""
+
+    csv_head: str = ""
+    kind: str = ""
+    from_csv: Any = None  # (text, file name) -> estimate
+    from_dataset: Any = None  # NetCDF dataset -> estimate
+    from_npz: Any = None  # path -> estimate
+
+
+N_AXES = EstimateKind()
+
+
+def register_estimate_kind(csv_head: str, kind: str, from_csv: Any, from_dataset: Any, from_npz: Any) -> None:
+    """Let :func:`load_estimate` read the N-axis model's files (called by ``amb_fast.system`` on import)."""
+    N_AXES.csv_head, N_AXES.kind = csv_head, kind
+    N_AXES.from_csv, N_AXES.from_dataset, N_AXES.from_npz = from_csv, from_dataset, from_npz
+
+
 _COLUMNS = (  # CSV column -> (Estimate field or expression, unit)
     "freq_Hz", "excited", "weak", "H_real_N_per_m", "H_imag_N_per_m", "k_N_per_m", "c_Ns_per_m", "k_smooth_N_per_m",
     "c_smooth_Ns_per_m", "k_std_N_per_m", "c_std_Ns_per_m", "force_real_N", "force_imag_N", "displacement_real_m",
@@ -107,7 +129,7 @@ def estimate_to_xarray(estimate: Estimate):  # noqa: ANN201 - xarray is optional
 
 def estimate_to_dataframe(estimate: Estimate):  # noqa: ANN201 - pandas is optional
     """One row per line (excited and unexcited), indexed by frequency (Hz), units in the column names."""
-    pd = _pandas()
+    pd = pandas_module()
     table = _table(estimate)
     frame = pd.DataFrame({name: table[:, j] for j, name in enumerate(_COLUMNS)})
     frame["excited"] = frame["excited"].astype(bool)
@@ -116,7 +138,7 @@ def estimate_to_dataframe(estimate: Estimate):  # noqa: ANN201 - pandas is optio
 
 def sweep_to_dataframe(result: Any):  # noqa: ANN201, ANN401
     """One row per point and line: the swept gains, status, freq_Hz and the estimates."""
-    pd = _pandas()
+    pd = pandas_module()
     n, lines = result.k.shape
     columns: dict[str, Any] = {name: np.repeat(values, lines) for name, values in result.points.items()}
     columns["status"] = np.repeat(result.status, lines)
@@ -128,7 +150,7 @@ def sweep_to_dataframe(result: Any):  # noqa: ANN201, ANN401
     return pd.DataFrame(columns)
 
 
-def _pandas():  # noqa: ANN202
+def pandas_module():  # noqa: ANN202
     try:
         import pandas as pd
     except ImportError as error:
@@ -179,7 +201,8 @@ def load_estimate(path: str | Path) -> Estimate | EstimateN:
     """Read an estimate written by :meth:`Estimate.save` (``.csv`` or ``.nc``) or :meth:`EstimateN.save`
     (``.csv``, ``.nc`` or ``.npz``: an :class:`EstimateN`); a damaged file is refused, naming it."""
     from .._experiment import Estimate, UnexcitedLines
-    from ..system import _results as n_axes  # estimates of N axes: the file says which kind it holds
+
+    n_axes = N_AXES  # estimates of N axes (registered by amb_fast.system): the file says which kind it holds
 
     path = Path(path)
     require(path.is_file(), "path", str(path), "an existing file")
@@ -188,7 +211,7 @@ def load_estimate(path: str | Path) -> Estimate | EstimateN:
         suffix in (*ESTIMATE_SUFFIXES, ".npz"), "path", str(path), "a file name ending in .csv or .nc, or .npz (N axes)"
     )
     if suffix == ".npz":
-        return n_axes.load_estimate(path)
+        return n_axes.from_npz(path)
     if suffix == ".csv":
         raw = path.read_bytes()
         first, _, body = raw.partition(b"\n")
@@ -197,8 +220,8 @@ def load_estimate(path: str | Path) -> Estimate | EstimateN:
         if first[10:].strip().decode(errors="replace") != digest([body]):
             raise ValueError(f"{path.name} is damaged: its content does not match its SHA-256 checksum")
         text = body.decode()
-        if text.startswith(n_axes.CSV_HEAD):
-            return n_axes.estimate_from_csv(text, path.name)
+        if n_axes.csv_head and text.startswith(n_axes.csv_head):
+            return n_axes.from_csv(text, path.name)
         meta = json.loads(next(line for line in text.splitlines() if line.startswith("# meta: "))[8:])
         table = _csv_rows(text)
         col = {name: table[:, j] for j, name in enumerate(_COLUMNS)}
@@ -217,8 +240,8 @@ def load_estimate(path: str | Path) -> Estimate | EstimateN:
         from ._netcdf import read_netcdf
 
         ds = read_netcdf(path)
-        if ds.attrs.get("amb_fast_kind") == n_axes.KIND:
-            return n_axes.estimate_from_dataset(ds)
+        if n_axes.kind and ds.attrs.get("amb_fast_kind") == n_axes.kind:
+            return n_axes.from_dataset(ds)
         require("amb_fast" in ds.attrs, "path", str(path), "a .nc file written by Estimate.save or EstimateN.save "
                 "(this one holds another dataset: a sweep's loads with load_sweep or SweepResultN.load)")  # fmt: skip
         meta = json.loads(ds.attrs["amb_fast"])

@@ -59,9 +59,9 @@ class Campbell(ArrayRecord):
         """Frequency of every whirling mode (damping ratio below 0.9) against speed (rev/min), forward and
         backward marked, with the synchronous line (1X); unstable poles circled. Returns the Axes
         (matplotlib, the extra ``plot``)."""
-        from ..plots import _pyplot
+        from ..plots import pyplot_module
 
-        plt = _pyplot()
+        plt = pyplot_module()
         if ax is None:
             _, ax = plt.subplots(figsize=(7.0, 4.5))
         rpm = self.speed * 60.0 / (2 * np.pi)

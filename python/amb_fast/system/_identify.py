@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike
 from .. import _checks
 from .._errors import IdentificationWarning, NonPeriodicExcitationWarning
 from .._excitation import period_samples
-from .._experiment import _lines
+from .._experiment import excited_lines
 from .._mechanics import Mechanics
 from .._params import Rig
 from .._validate import integer, real, require
@@ -201,7 +201,7 @@ def identify(
             e, s, j = bad[0]
             raise ValueError(f"{name} must be finite, got {float(x[e, s, j])!r} in experiment {e}, axis {names[j]}, "
                              f"sample {s + start}")  # fmt: skip
-    harmonics = _lines(F[0, :, 0], period, f0, fs, f_max, lines, offset=start)
+    harmonics = excited_lines(F[0, :, 0], period, f0, fs, f_max, lines, offset=start)
     Fp, Yp = _spectra(F, harmonics, period), _spectra(Y, harmonics, period)
     condition = np.linalg.cond(Fp.mean(axis=0))
     bad = ~(condition <= MAX_CONDITION)

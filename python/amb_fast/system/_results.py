@@ -21,7 +21,7 @@ from .._sweep_result import unit_of
 from .._validate import require
 from ..io._atomic import atomic_path, atomic_text
 from ..io._netcdf import read_netcdf, write_dataset_netcdf, write_netcdf
-from ..io._results import UNITS, _pandas, digest, read_npz, version
+from ..io._results import UNITS, digest, pandas_module, read_npz, register_estimate_kind, version
 
 if TYPE_CHECKING:
     from ._experiment import EstimateN
@@ -104,7 +104,7 @@ def estimate_to_dataframe(est: EstimateN):  # noqa: ANN201 - pandas is optional
     """One row per line and matrix entry: ``freq_Hz``, ``i`` (the force's axis), ``j`` (the displacement's),
     then ``H`` and ``receptance`` (real and imaginary parts), ``k``, ``c``, smoothed and standard errors,
     units in the column names."""
-    return _pandas().DataFrame(_long({n: getattr(est, n) for n in MATRICES}, est.freq, est.axes))
+    return pandas_module().DataFrame(_long({n: getattr(est, n) for n in MATRICES}, est.freq, est.axes))
 
 
 # -- an estimate's files --------------------------------------------------------------------------------------------
@@ -218,7 +218,7 @@ def sweep_to_dataframe(result: SweepResultN):  # noqa: ANN201 - pandas is option
     rows = result.freq.size * len(result.axes) ** 2
     head = {name: np.repeat(values, rows) for name, values in result.params.items()}
     head["status"] = np.repeat(sweep_status(result), rows)
-    return _pandas().DataFrame(head | _long({n: getattr(result, n) for n in _SWEEP}, result.freq, result.axes))
+    return pandas_module().DataFrame(head | _long({n: getattr(result, n) for n in _SWEEP}, result.freq, result.axes))
 
 
 def save_sweep(result: SweepResultN, path: str | Path) -> Path:
@@ -263,3 +263,7 @@ def load_sweep(path: str | Path) -> SweepResultN:
         arrays["receptance"] = _complex(np.asarray(ds.receptance_real.values), np.asarray(ds.receptance_imag.values))
     arrays["stable"], arrays["seeds"] = arrays["stable"].astype(bool), arrays["seeds"].astype(np.uint64)
     return SweepResultN(params=params, axes=tuple(str(a) for a in header["axes"]), **arrays)
+
+
+# amb_fast.load_estimate (the io layer) reads these files through what this module registers.
+register_estimate_kind(CSV_HEAD, KIND, estimate_from_csv, estimate_from_dataset, load_estimate)

@@ -27,7 +27,7 @@ from .._errors import UnstableLoopError
 from .._excitation import Multisine
 from .._linear import checked_poles, eigenvalues
 from .._params import PID, Rig
-from .._sweep import _grid, _progress_bar, point_seeds, points_per_call
+from .._sweep import point_seeds, points_per_call, progress_bar, sweep_grid
 from .._validate import integer, require, seed_value
 from . import _results
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
@@ -192,7 +192,7 @@ def sweep(
     if settle_periods is not None:
         settle_periods = integer("settle_periods", settle_periods, 0)
     threads = integer("workers", workers if workers is not None else (os.cpu_count() or 1), 1)
-    _, points = _grid(dict(axes), grid)
+    _, points = sweep_grid(dict(axes), grid)
     count = next(iter(points.values())).size
     seeds = point_seeds(seed_value(seed), count)
     names = rig.mechanics().names
@@ -219,7 +219,7 @@ def sweep(
         if values is not None:
             k[i], c[i], k_std[i], c_std[i], receptance[i] = values
 
-    bar = _progress_bar(progress, count)
+    bar = progress_bar(progress, count)
     try:
         if executor is None and N == 2:  # the core's two-axis sweep: 4 x 80 bytes of estimates a line
             size = points_per_call(count, threads, 320 * excitation.freq.size, bar is not None)

@@ -58,9 +58,9 @@ class UnbalanceResponse(ArrayRecord):
 
     def plot(self, ax: Any = None) -> Any:
         """Probe amplitudes (um) and phases against speed (rev/min). Returns the two Axes (matplotlib)."""
-        from ..plots import _pyplot
+        from ..plots import pyplot_module
 
-        plt = _pyplot()
+        plt = pyplot_module()
         if ax is None:
             _, ax = plt.subplots(2, 1, sharex=True, figsize=(7.0, 5.5))
         rpm = self.speed * 60.0 / (2 * np.pi)

@@ -12,7 +12,7 @@ from numpy.typing import ArrayLike
 from .. import system
 from .._blas import parked_blas
 from .._excitation import Multisine, period_samples
-from .._experiment import _lines
+from .._experiment import excited_lines
 from .._validate import integer, real, require
 from ..system import EstimateN, SweepResultN, TraceN, hadamard_signs
 from ..system._experiment import estimate, experiment_forces
@@ -113,7 +113,7 @@ def identify(
     Y = np.ascontiguousarray(Y[:, start:whole].transpose(0, 2, 1))
     for name, x in (("force", F), ("displacement", Y)):
         require(bool(np.all(np.isfinite(x))), name, "non-finite samples", "finite")
-    harmonics = _lines(F[0, 0], period, f0, fs, f_max, lines)
+    harmonics = excited_lines(F[0, 0], period, f0, fs, f_max, lines)
 
     def spectra(x: np.ndarray) -> np.ndarray:  # every period's lines: (periods, lines, channel, experiment)
         lines = np.fft.rfft(x.reshape(2, 2, P, period), axis=3)[..., harmonics]
