@@ -12,8 +12,7 @@ import numpy as np
 
 from .._excitation import schroeder_multisine
 from .._validate import integer
-from ..system import RotorRig, campbell, measure_sensitivity, run_experiment, unbalance_response
-from ..system._file import load_rotor
+from ..system import RotorRig, campbell, load_rotor, measure_sensitivity, run_experiment, unbalance_response
 from ._options import (
     FIGURE_SUFFIXES,
     UsageError,

@@ -15,7 +15,8 @@ from .._dispatch import register, register_recordings
 from .._mechanics import Mechanics
 from ._campbell import Campbell, campbell
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
-from ._experiment import EstimateN, TraceN, hadamard_signs, run_experiment, simulate
+from ._experiment import EstimateN, TraceN, estimate, experiment_forces, hadamard_signs, run_experiment, simulate
+from ._file import load_rotor
 from ._flexible import FlexibleRotor
 from ._identify import identify
 from ._model import (
@@ -28,6 +29,7 @@ from ._model import (
     loop_model,
     plant,
     predict,
+    require_stable,
     sensitivity,
     stability_margin,
 )
@@ -37,6 +39,10 @@ from ._sweep import SweepResultN, point_model, sweep
 from ._unbalance import UnbalanceResponse, unbalance_response
 
 __all__ = [
+    "estimate",
+    "experiment_forces",
+    "load_rotor",
+    "require_stable",
     "Campbell",
     "EstimateN",
     "FlexibleRotor",

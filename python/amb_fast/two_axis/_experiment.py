@@ -14,8 +14,7 @@ from .._blas import parked_blas
 from .._excitation import Multisine, period_samples
 from .._experiment import excited_lines
 from .._validate import integer, real, require
-from ..system import EstimateN, SweepResultN, TraceN, hadamard_signs
-from ..system._experiment import estimate, experiment_forces
+from ..system import EstimateN, SweepResultN, TraceN, estimate, experiment_forces, hadamard_signs
 from ._model import ControllerMatrix, ControllerSpec, _rig
 from ._rig import TwoAxisRig, planar_mechanics
 

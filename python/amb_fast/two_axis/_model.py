@@ -13,11 +13,10 @@ from typing import Any, Union
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .. import system as nd
 from .._linear import AnyController, StabilityMargin
 from .._validate import require
-from ..system import _control, _model
-from ..system._control import ControllerMatrix
-from ..system._model import LoopModel
+from ..system import ControllerMatrix, LoopModel
 from ._rig import TwoAxisRig
 
 #: One controller for both axes, one per axis ``(cx, cy)``, or a 2x2 matrix ``[[cxx, cxy], [cyx, cyy]]``
@@ -29,7 +28,7 @@ __all__ = ["ControllerMatrix", "LoopModel"]
 
 def controller_matrix(controller: ControllerSpec) -> ControllerMatrix:
     """Reads a controller spec (see :data:`ControllerSpec`) into a 2x2 :class:`ControllerMatrix`."""
-    return _control.controller_matrix(controller, 2)
+    return nd.controller_matrix(controller, 2)
 
 
 def _rig(rig: Any) -> TwoAxisRig:
@@ -42,38 +41,38 @@ def plant_matrices2(rig: TwoAxisRig) -> tuple[np.ndarray, np.ndarray, list[str]]
 
     States: ``x, x'``, then axis x's chain (``x.i``, ``x.i_f``, ``x.ys`` as present), then y's likewise.
     """
-    A, B, layout = _model.plant(_rig(rig))
+    A, B, layout = nd.plant(_rig(rig))
     return A, B, list(layout.names)
 
 
 def discrete_plant2(rig: TwoAxisRig, fs: float) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """Exact one-sample ``Phi``, ``Gamma`` (inputs ``fx, fy, ux, uy``) with each axis' dead time
     (:func:`amb_fast.system.discrete_plant`)."""
-    Phi, Gamma, names = _model.discrete_plant(_rig(rig), float(fs))
+    Phi, Gamma, names = nd.discrete_plant(_rig(rig), float(fs))
     return Phi, Gamma, list(names)
 
 
 def loop_model(rig: TwoAxisRig, controller: ControllerSpec) -> LoopModel:
     """The closed loop of ``rig`` under ``controller`` (cached per distinct value)."""
-    return _model.loop_model(_rig(rig), controller)
+    return nd.loop_model(_rig(rig), controller)
 
 
 def closed_loop(rig: TwoAxisRig, controller: ControllerSpec) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The two-axis loop as one discrete state space ``(A, B, C, D)`` (sample period ``1/fs``), as
     :func:`amb_fast.closed_loop` for one axis: inputs the applied forces ``fx, fy`` (N); outputs the probe
     readings (m) and the coil currents (A) of x and y. States: :attr:`LoopModel.states`."""
-    return _model.closed_loop(_rig(rig), controller)
+    return nd.closed_loop(_rig(rig), controller)
 
 
 def closed_loop_poles(rig: TwoAxisRig, controller: ControllerSpec) -> np.ndarray:
     """Poles of the linearised two-axis sampled-data loop in the z-plane (stable: all ``|z| < 1``), from
     the core's eigenvalue solver, as for one axis (a sweep checks its points with the same numbers)."""
-    return _model.closed_loop_poles(_rig(rig), controller)
+    return nd.closed_loop_poles(_rig(rig), controller)
 
 
 def require_stable(rig: TwoAxisRig, controller: ControllerSpec) -> np.ndarray:
     """The closed-loop poles (read-only), or :class:`UnstableLoopError` naming the unstable ones."""
-    return _model.require_stable(_rig(rig), controller, "the two-axis closed loop")
+    return nd.require_stable(_rig(rig), controller, "the two-axis closed loop")
 
 
 def predict(rig: TwoAxisRig, controller: ControllerSpec, freq: ArrayLike) -> np.ndarray:
@@ -82,14 +81,14 @@ def predict(rig: TwoAxisRig, controller: ControllerSpec, freq: ArrayLike) -> np.
     Y: the probe readings (rotated, lagged, as recorded); F: the recorded forces on the actuator axes
     (through each axis' AC-coupled transducer). ``R[:, i, j] = dY_i / dF_j``.
     """
-    return _model.predict(_rig(rig), controller, freq)
+    return nd.predict(_rig(rig), controller, freq)
 
 
 def sensitivity(rig: TwoAxisRig, controller: ControllerSpec, freq: ArrayLike) -> np.ndarray:
     """Sensitivity ``S = (I - K P)^-1`` at the controller outputs, shape (len(freq), 2, 2).
 
     ``P``: current commands to probe readings; ``K``: the controller matrix (delays included)."""
-    return _model.sensitivity(_rig(rig), controller, freq)
+    return nd.sensitivity(_rig(rig), controller, freq)
 
 
 @dataclass(frozen=True)
@@ -111,7 +110,7 @@ class StabilityMargin2(StabilityMargin):
 
 def stability_margin(rig: TwoAxisRig, controller: ControllerSpec, points: int = 20_000) -> StabilityMargin2:
     """Peaks of the sensitivity over ``points`` log-spaced frequencies from 0.01 Hz to just below Nyquist."""
-    m = _model.stability_margin(_rig(rig), controller, points)
+    m = nd.stability_margin(_rig(rig), controller, points)
     return StabilityMargin2(m.peak, m.peak_db, m.frequency, m.zone, m.stable, *m.axes)
 
 
@@ -127,4 +126,4 @@ def effective_coefficients(
     the actual coefficients contain too (``process=True``). The final ``R`` expresses them per probe axis,
     as the estimate ``F Y^-1`` (Y: the probes' readings) does; with aligned probes it is the identity.
     """
-    return _model.effective_coefficients(_rig(rig), controller, freq, discrete=discrete, process=process)
+    return nd.effective_coefficients(_rig(rig), controller, freq, discrete=discrete, process=process)
