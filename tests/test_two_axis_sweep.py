@@ -161,3 +161,27 @@ def test_the_batch_falls_back_to_single_points_on_overflow(monkeypatch: pytest.M
     assert calls == [2, 1, 1] and result.status.tolist() == ["ok", "overflow"] and result.stable.all()
     np.testing.assert_array_equal(result.k[0], expected.k[0])
     assert np.isnan(result.k[1]).all()
+
+
+def test_a_marginal_loop_that_overflows_says_how_close_its_pole_is() -> None:
+    """At the stability boundary (|z| = 1 - 3e-15) the stationary state may overflow in the core; the error said
+    "the loop is unstable" of a loop whose poles passed the test. It now names the pole's distance."""
+    coupled = ta.TwoAxisRig(x=af.Rig.paper(), y=af.Rig.paper(), kxy=5e3, kyx=-5e3, sensor_angle=0.05)
+    pid = af.PID.paper()
+
+    def radius(kp: float) -> float:
+        return float(np.abs(ta.closed_loop_poles(coupled, replace(pid, kp=kp))).max())
+
+    low, high = 500.0, 2400.0
+    for _ in range(60):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if radius(middle) >= 1.0 else (low, middle)
+    overflowed = 0
+    for kp in (high, np.nextafter(high, np.inf)):
+        try:
+            ta.run_experiment(coupled, replace(pid, kp=kp), af.schroeder_multisine(f0=20.0, f_max=100.0), periods=2)
+        except OverflowError as error:
+            overflowed += 1
+            assert "slowest pole at |z| = 1 - " in str(error) and "within rounding of the unit circle" in str(error)
+    if not overflowed:
+        pytest.skip("this build's rounding computed the marginal loop's stationary state")

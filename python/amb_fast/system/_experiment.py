@@ -406,10 +406,15 @@ def run_experiment(
     # Drawn from the steady state, all N experiments in one call (the per-line solves once); from rest the
     # core runs up to two in lock step.
     step = N if start == "steady" else 2
-    parts = [_core.mimo_line_experiments(**args, period_forces=np.ascontiguousarray(forces[first : first + step]),
-                                         settle_periods=settle, periods=periods, seeds=seeds[first : first + step],
-                                         steady_start=start == "steady", bins=harmonics)
-             for first in range(0, N, step)]  # fmt: skip
+    try:
+        parts = [_core.mimo_line_experiments(**args, period_forces=np.ascontiguousarray(forces[first : first + step]),
+                                             settle_periods=settle, periods=periods, seeds=seeds[first : first + step],
+                                             steady_start=start == "steady", bins=harmonics)
+                 for first in range(0, N, step)]  # fmt: skip
+    except OverflowError as error:  # poles inside the circle, yet the spectra overflowed: say which pole, how close
+        radius = float(np.max(np.abs(poles)))
+        raise OverflowError(f"{what} has its slowest pole at |z| = 1 - {1.0 - radius:.3g}, within rounding of the "
+                            f"unit circle: its stationary state cannot be computed ({error})") from error  # fmt: skip
     Fp, Yp = parts[0] if len(parts) == 1 else (np.concatenate([part[i] for part in parts], axis=-1) for i in (0, 1))
     if exciter == "shaker":
         return estimate(Fp, Yp, harmonics * excitation.f0, mech, excitation.period_samples, window)
