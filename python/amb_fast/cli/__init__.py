@@ -26,7 +26,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from .._errors import TouchdownError
-from ..io._results import version
+from ..io import version
 from ..two_axis import add_two_axis_options
 from ._commands import (
     cmd_identify,

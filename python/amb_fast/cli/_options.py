@@ -105,7 +105,7 @@ def _save_figure(fig, path: Path, meta: dict) -> None:  # noqa: ANN001
     """Atomically; a PNG records the version, rig, controller and seed in its text chunks."""
     import matplotlib.pyplot as plt
 
-    from ..io._results import figure_metadata
+    from ..io import figure_metadata
 
     kind = path.suffix.lstrip(".").lower()
     with atomic_path(path) as target:

@@ -17,14 +17,34 @@
 from __future__ import annotations
 
 from ._atomic import atomic_path, atomic_text, atomic_write
+from ._channels import UNITS as CHANNEL_UNITS
 from ._channels import split_unit
-from ._netcdf import read_netcdf, write_netcdf
+from ._netcdf import read_netcdf, write_dataset_netcdf, write_netcdf
 from ._recording import Recording, load_recording, save_recording
-from ._results import load_estimate, save_estimate
+from ._results import UNITS as RESULT_UNITS
+from ._results import (
+    digest,
+    figure_metadata,
+    load_estimate,
+    pandas_module,
+    read_npz,
+    register_estimate_kind,
+    save_estimate,
+    version,
+)
 from ._text import sniff
 
 __all__ = [
+    "CHANNEL_UNITS",
+    "RESULT_UNITS",
     "Recording",
+    "digest",
+    "figure_metadata",
+    "pandas_module",
+    "read_npz",
+    "register_estimate_kind",
+    "version",
+    "write_dataset_netcdf",
     "atomic_path",
     "atomic_text",
     "atomic_write",

@@ -21,8 +21,8 @@ from .._experiment import excited_lines
 from .._mechanics import Mechanics
 from .._params import Rig
 from .._validate import integer, real, require
-from ..io._channels import UNITS, split_unit
-from ..io._recording import Recording
+from ..io import CHANNEL_UNITS as UNITS
+from ..io import Recording, split_unit
 from ._exciter import amb_force, corrected_process
 from ._experiment import EstimateN, estimate
 from ._model import known_dynamics

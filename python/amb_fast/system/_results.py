@@ -19,9 +19,19 @@ import numpy as np
 
 from .._sweep_result import unit_of
 from .._validate import require
-from ..io._atomic import atomic_path, atomic_text
-from ..io._netcdf import read_netcdf, write_dataset_netcdf, write_netcdf
-from ..io._results import UNITS, digest, pandas_module, read_npz, register_estimate_kind, version
+from ..io import RESULT_UNITS as UNITS
+from ..io import (
+    atomic_path,
+    atomic_text,
+    digest,
+    pandas_module,
+    read_netcdf,
+    read_npz,
+    register_estimate_kind,
+    version,
+    write_dataset_netcdf,
+    write_netcdf,
+)
 
 if TYPE_CHECKING:
     from ._experiment import EstimateN

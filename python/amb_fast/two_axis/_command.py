@@ -12,7 +12,7 @@ import numpy as np
 from .._excitation import Multisine, schroeder_multisine
 from .._linear import AnyController
 from .._params import PID, Rig
-from ..io._atomic import atomic_write
+from ..io import atomic_write
 from ..plots import plot_coefficients2
 from ..system import EstimateN
 from ._experiment import run_experiment
