@@ -31,7 +31,8 @@ void bind_campbell(py::module_& m) {
         [](const Array& stack, const RowMatrixXd& R, int workers) {
             if (stack.ndim() != 3 || stack.shape(1) != stack.shape(2))
                 throw std::invalid_argument("stack must have shape (count, m, m)");
-            const auto count = static_cast<Eigen::Index>(stack.shape(0)), size = static_cast<Eigen::Index>(stack.shape(1));
+            const auto count = static_cast<Eigen::Index>(stack.shape(0)),
+                       size = static_cast<Eigen::Index>(stack.shape(1));
             py::array_t<std::complex<double>> values({count, size}), shapes({count, R.rows(), size});
             std::complex<double>*v = values.mutable_data(), *s = shapes.mutable_data();
             const double* in = stack.data();

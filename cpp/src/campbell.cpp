@@ -1,10 +1,10 @@
 // A Campbell diagram's linear algebra (campbell.hpp): one speed per task, on the core's threads.
 #include "amb_fast/campbell.hpp"
 
-#include <unsupported/Eigen/MatrixFunctions>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <unsupported/Eigen/MatrixFunctions>
 #include <vector>
 
 #include "amb_fast/blocks.hpp"
@@ -160,8 +160,13 @@ void hessenberg_eigenvalues(double* a, Eigen::Index n, cd* values) {
 // row operations' multipliers and swaps), and the vector y.
 struct InverseIteration {
     explicit InverseIteration(Eigen::Index n)
-        : ur(static_cast<std::size_t>(n * n)), ui(ur.size()), lr(static_cast<std::size_t>(n)), li(lr.size()),
-          swapped(lr.size()), yr(lr.size()), yi(lr.size()) {}
+        : ur(static_cast<std::size_t>(n * n)),
+          ui(ur.size()),
+          lr(static_cast<std::size_t>(n)),
+          li(lr.size()),
+          swapped(lr.size()),
+          yr(lr.size()),
+          yi(lr.size()) {}
     std::vector<double> ur, ui, lr, li, swapped, yr, yi;
 };
 
@@ -169,11 +174,12 @@ struct InverseIteration {
 // Hessenberg, row-major; LU of H - lambda I pivoting between neighbouring rows; a zero pivot made tiny, as
 // LAPACK's hsein). Elementwise loops over real arrays (vectorised where the processor can; no reduction is
 // reordered, so the same digits either way).
-AMB_FAST_ALWAYS_INLINE void inverse_iteration_kernel(const double* H, Eigen::Index n, double lambda_r,
-                                                     double lambda_i, double tiny, InverseIteration& w) {
+AMB_FAST_ALWAYS_INLINE void inverse_iteration_kernel(const double* H, Eigen::Index n, double lambda_r, double lambda_i,
+                                                     double tiny, InverseIteration& w) {
     double *ur = w.ur.data(), *ui = w.ui.data(), *yr = w.yr.data(), *yi = w.yi.data();
     for (Eigen::Index i = 0; i < n; ++i) {
-        for (Eigen::Index j = std::max<Eigen::Index>(i - 1, 0); j < n; ++j) ur[i * n + j] = H[i * n + j], ui[i * n + j] = 0.0;
+        for (Eigen::Index j = std::max<Eigen::Index>(i - 1, 0); j < n; ++j)
+            ur[i * n + j] = H[i * n + j], ui[i * n + j] = 0.0;
         ur[i * n + i] -= lambda_r;
         ui[i * n + i] = -lambda_i;
     }
@@ -234,14 +240,14 @@ constexpr auto inverse_iteration_avx2 = inverse_iteration_portable;
 
 }  // namespace
 
-void loop_modes(const double* stack, Eigen::Index count, Eigen::Index m, const RowMatrixXd& R, int workers,
-                cd* values, cd* shapes) {
+void loop_modes(const double* stack, Eigen::Index count, Eigen::Index m, const RowMatrixXd& R, int workers, cd* values,
+                cd* shapes) {
     require(R.cols() == m, "R", R.cols(), "m columns (one per state)");
     const Eigen::Index r = R.rows();
     const auto M = static_cast<std::size_t>(m);
     in_blocks(count, 8, workers, [&] {
-        return [&, hessenberg = Eigen::HessenbergDecomposition<Eigen::MatrixXd>(m),
-                work = RowMatrixXd(m, m), H = RowMatrixXd(m, m), iteration = InverseIteration(m), v = std::vector<cd>(M),
+        return [&, hessenberg = Eigen::HessenbergDecomposition<Eigen::MatrixXd>(m), work = RowMatrixXd(m, m),
+                H = RowMatrixXd(m, m), iteration = InverseIteration(m), v = std::vector<cd>(M),
                 Q = Eigen::MatrixXd(m, m)](Eigen::Index begin, Eigen::Index end) mutable {
             for (Eigen::Index s = begin; s < end; ++s) {
                 const Eigen::MatrixXd A = Eigen::Map<const RowMatrixXd>(stack + s * m * m, m, m);
@@ -265,16 +271,18 @@ void loop_modes(const double* stack, Eigen::Index count, Eigen::Index m, const R
                         continue;
                     }
                     for (std::size_t j = 0; j < M; ++j) {  // a start vector of its own per index
-                        iteration.yr[j] = 1.0 + 0.5 * std::sin(static_cast<double>(static_cast<std::size_t>(i + 1) * (j + 1)));
+                        iteration.yr[j] =
+                            1.0 + 0.5 * std::sin(static_cast<double>(static_cast<std::size_t>(i + 1) * (j + 1)));
                         iteration.yi[j] = 0.0;
                     }
-                    (simd_avx2() ? inverse_iteration_avx2 : inverse_iteration_portable)(H.data(), m, value[i].real(),
-                                                                                        value[i].imag(), tiny, iteration);
+                    (simd_avx2() ? inverse_iteration_avx2 : inverse_iteration_portable)(
+                        H.data(), m, value[i].real(), value[i].imag(), tiny, iteration);
                     double norm = 0.0;  // v = D Q y, of unit norm
                     for (Eigen::Index a = 0; a < m; ++a) {
                         cd sum = 0.0;
                         for (Eigen::Index b = 0; b < m; ++b)
-                            sum += Q(a, b) * cd(iteration.yr[static_cast<std::size_t>(b)], iteration.yi[static_cast<std::size_t>(b)]);
+                            sum += Q(a, b) * cd(iteration.yr[static_cast<std::size_t>(b)],
+                                                iteration.yi[static_cast<std::size_t>(b)]);
                         v[static_cast<std::size_t>(a)] = d[a] * sum;
                         norm += std::norm(v[static_cast<std::size_t>(a)]);
                     }

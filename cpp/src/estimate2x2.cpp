@@ -168,11 +168,20 @@ Estimate2x2 estimate_nxn(const std::complex<double>* force_lines, const std::com
         estimate_lines<decltype(fixed)::value>(force_lines, displacement_lines, readout, periods, lines, n, est);
     };
     switch (n) {
-        case 1: run(std::integral_constant<int, 1>{}); break;
-        case 2: run(std::integral_constant<int, 2>{}); break;
-        case 3: run(std::integral_constant<int, 3>{}); break;
-        case 4: run(std::integral_constant<int, 4>{}); break;
-        default: run(std::integral_constant<int, Eigen::Dynamic>{});
+        case 1:
+            run(std::integral_constant<int, 1>{});
+            break;
+        case 2:
+            run(std::integral_constant<int, 2>{});
+            break;
+        case 3:
+            run(std::integral_constant<int, 3>{});
+            break;
+        case 4:
+            run(std::integral_constant<int, 4>{});
+            break;
+        default:
+            run(std::integral_constant<int, Eigen::Dynamic>{});
     }
     return est;
 }

@@ -107,8 +107,8 @@ LineSolves::LineSolves(const MimoModel& model_in, Eigen::Index L_in, std::vector
     Xn.resize(n, 2 * B * q);
     z.resize(static_cast<std::size_t>(B));
     for (Eigen::Index k = 0; k < B; ++k)
-        z[static_cast<std::size_t>(k)] = std::polar(
-            1.0, 2.0 * pi * static_cast<double>(bins[static_cast<std::size_t>(k)]) / static_cast<double>(L));
+        z[static_cast<std::size_t>(k)] =
+            std::polar(1.0, 2.0 * pi * static_cast<double>(bins[static_cast<std::size_t>(k)]) / static_cast<double>(L));
     // Four lines at a time (the last group padded with its last line), each lane's solutions copied out.
     // Bt and Ct are real, so G's entries are sums of real times complex, summed in the lanes.
     constexpr int lanes = HessenbergLU::lanes;
