@@ -32,7 +32,6 @@ from .._validate import integer, require, seed_value
 from . import _results
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
 from ._experiment import (
-    EstimateN,
     coefficients,
     core_args,
     experiment_forces,
@@ -206,13 +205,16 @@ def sweep(
     def model(i: int) -> tuple[Any, ControllerMatrix]:
         return point_model(rig, controller, {n: float(v[i]) for n, v in points.items()})
 
-    def point(i: int) -> EstimateN | None | bool:
+    def point(i: int) -> tuple[bool, tuple[np.ndarray, ...] | None]:
+        """Whether point i is stable, and its (k, c, k_std, c_std, receptance); None where it is unstable or
+        its spectra overflowed (a pole within rounding of |z| = 1: stable, its rows stay NaN)."""
         try:
-            return run_experiment(*model(i), excitation, seed=int(seeds[i]), **options)  # type: ignore[arg-type]
+            est = run_experiment(*model(i), excitation, seed=int(seeds[i]), **options)  # type: ignore[arg-type]
         except UnstableLoopError:
-            return None
-        except OverflowError:  # stable, but its spectra overflowed (a pole within rounding of |z| = 1)
-            return True
+            return False, None
+        except OverflowError:
+            return True, None
+        return True, (est.k, est.c, est.k_std, est.c_std, est.receptance)
 
     def keep(i: int, values: tuple[np.ndarray, ...] | None) -> None:
         stable[i] = True  # its poles are inside the unit circle; None: its spectra overflowed (rows stay NaN)
@@ -233,11 +235,9 @@ def sweep(
         else:
             pool = ThreadPoolExecutor(threads) if executor is None else executor
             try:
-                for i, est in enumerate(pool.map(point, range(count))):
-                    if isinstance(est, EstimateN):
-                        keep(i, (est.k, est.c, est.k_std, est.c_std, est.receptance))
-                    elif est:
-                        keep(i, None)
+                for i, (ok, values) in enumerate(pool.map(point, range(count))):
+                    if ok:
+                        keep(i, values)
                     if bar is not None:
                         bar.update(1)
             finally:
