@@ -19,7 +19,7 @@ from .._equality import ArrayRecord
 from .._linear import split_dead_time
 from .._validate import require
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix, controller_state_space
-from ._model import System, plant, sensor_rows
+from ._model import Layout, System, plant, sensor_rows
 from ._rotor import RotorRig
 
 
@@ -147,6 +147,13 @@ def _workers(count: int) -> int:
     return 0 if count >= 32 else 1
 
 
+def speed_plant(rig: RotorRig) -> tuple[np.ndarray, np.ndarray, np.ndarray, Layout]:
+    """The continuous plant as affine in the speed: ``A(W) = A0 + W A1`` (``A1``: the gyroscopic rows per
+    rad/s), its ``B`` and layout."""
+    A0, B, layout = plant(rig.at_speed(0.0))
+    return A0, plant(rig.at_speed(1.0))[0] - A0, B, layout
+
+
 def loop_stack(rig: RotorRig, controller: ControllerMatrix, speeds: np.ndarray) -> np.ndarray:
     """The closed loop's matrix at each speed, (speeds, n, n), as :func:`loop_model` makes it (the same states).
 
@@ -155,8 +162,7 @@ def loop_stack(rig: RotorRig, controller: ControllerMatrix, speeds: np.ndarray) 
     and, for a fractional dead time ``delta``, over ``T - delta``: ``G0 = Gamma_u(T - delta)`` and
     ``G1 = Phi(T - delta) Gamma_u(delta) = Gamma_u(T) - Gamma_u(T - delta)`` (:func:`discrete_plant`'s
     columns); the command lines and the controller are the same at every speed."""
-    A0, B, _ = plant(rig.at_speed(0.0))
-    A1 = plant(rig.at_speed(1.0))[0] - A0  # the gyroscopic rows per rad/s
+    A0, A1, B, _ = speed_plant(rig)
     n, N = A0.shape[0], B.shape[1] // 2
     T = 1.0 / controller.fs
     splits = [split_dead_time(axis.dead_time, controller.fs) for axis in rig.axes]

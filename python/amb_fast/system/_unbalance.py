@@ -21,7 +21,7 @@ from .._blas import one_blas_thread
 from .._equality import ArrayRecord
 from .._linear import checked_poles, eigenvalues
 from .._validate import real, require
-from ._campbell import loop_stack
+from ._campbell import loop_stack, speed_plant
 from ._control import ControllerSpec, controller_matrix
 from ._model import loop_model, plant, require_stable
 from ._rotor import RotorRig
@@ -95,8 +95,7 @@ def _drives(rig: RotorRig, sources: list[tuple[np.ndarray, complex]], speeds: np
     """``G_W f`` at each speed ``W``: what one sample of the rotating force ``Re(f e^{jWt})`` adds to the plant's
     state from ``t = 0``, (speeds, plant states) complex, integrated exactly in one batched exponential (the
     plant is affine in the speed, as in :func:`loop_stack`; the force grows as ``W^2``)."""
-    A0, _, lay = plant(rig.at_speed(0.0))
-    A1 = plant(rig.at_speed(1.0))[0] - A0
+    A0, A1, _, lay = speed_plant(rig)
     mech, n = rig.mechanics(), A0.shape[0]
     Mt = mech.mass + mech.actuators.T @ np.diag([a.mass_loading for a in rig.axes]) @ mech.actuators
     b = np.zeros(n, dtype=complex)
