@@ -35,6 +35,7 @@ from ._commands import (
     cmd_sweep,
 )
 from ._options import (
+    GAINS,
     IDENTIFY_OPTION_NAMES,
     MODEL_OPTION_NAMES,
     PID_OPTIONS,
@@ -87,7 +88,8 @@ def build_parser() -> argparse.ArgumentParser:
     sw = sub.add_parser("sweep", allow_abbrev=False, parents=[common],
                         help="a grid of gains, rig fields or controller parameters to .nc, .npz or .csv")  # fmt: skip
     _add_model_options(sw, gains=False)
-    for name, (_, unit, text) in list(PID_OPTIONS.items())[:3]:
+    for name in GAINS:
+        unit, text = PID_OPTIONS[name]
         sw.add_argument(f"--{name}", type=_values, help=f"{text} values ({unit}): 'a,b,c' or 'start:stop:count'")
     sw.add_argument("--vary", action="append", default=[], metavar="NAME=VALUES",
                     help="sweep any rig field or controller parameter, as amb_fast.sweep does: a Rig field "

@@ -14,13 +14,11 @@ from .._excitation import schroeder_multisine
 from .._validate import integer
 from ..system import RotorRig, campbell, load_rotor, measure_sensitivity, run_experiment, unbalance_response
 from ._options import (
-    FIGURE_SUFFIXES,
     UsageError,
-    _needs,
     _save_figure,
     _started,
     _values,
-    check_output,
+    check_save_and_figure,
     default_f_max,
 )
 
@@ -66,19 +64,13 @@ def _unbalance(text: str) -> list[tuple[float, float, float]]:
 
 def cmd_rotor(args: argparse.Namespace) -> None:
     rig, pid = load_rotor(args.rotor) if args.rotor is not None else (RotorRig.example(), RotorRig.example_controller())
-    if args.figure is not None:
-        if args.step == "sensitivity":
-            raise UsageError("--figure goes with experiment, campbell and unbalance (sensitivity prints a table)")
-        _needs("matplotlib", "plot", "--figure")
-        check_output(args.figure, "--figure", FIGURE_SUFFIXES, args.overwrite)
+    if args.figure is not None and args.step == "sensitivity":
+        raise UsageError("--figure goes with experiment, campbell and unbalance (sensitivity prints a table)")
     for option, value in (("--exciter", args.exciter != "shaker"), ("--rms", args.rms is not None),
                           ("--save", args.save is not None)):  # fmt: skip
         if value and args.step != "experiment":
             raise UsageError(f"{option} goes with experiment, not {args.step}")
-    if args.save is not None:
-        if args.save.suffix.lower() == ".nc":
-            _needs("h5netcdf", "xarray", "--save .nc")
-        check_output(args.save, "--save", (".nc", ".npz", ".csv"), args.overwrite)
+    check_save_and_figure(args, (".nc", ".npz", ".csv"))
     if args.rms is not None and not (np.isfinite(args.rms) and args.rms > 0):
         raise UsageError(f"--rms must be a finite amplitude > 0 ({'A' if args.exciter == 'amb' else 'N'} rms), "
                          f"got {args.rms:g}")  # fmt: skip
