@@ -9,7 +9,7 @@ import sys
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -49,7 +49,10 @@ class UsageError(Exception):
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse with its errors in the command's one-line form (exit status 2)."""
+    """argparse with its errors in the command's one-line form (exit status 2), and no abbreviated options."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **{"allow_abbrev": False, **kwargs})
 
     def error(self, message: str) -> NoReturn:
         print(f"amb-fast: error: {message} (see {self.prog} --help)", file=sys.stderr)
@@ -246,6 +249,7 @@ def _excitation(args: argparse.Namespace, pid: AnyController):  # noqa: ANN202
 
 
 # -- the library's messages in the command's words -------------------------------------------------------------
+
 
 def _option_names(*options: str) -> dict[str, str]:
     return dict(zip(_attributes(options), (f"--{option}" for option in options)))

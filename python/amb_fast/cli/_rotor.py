@@ -26,7 +26,6 @@ from ._options import (
 def add_rotor_parser(subparsers: Any, parents: list[argparse.ArgumentParser]) -> None:
     rotor = subparsers.add_parser(
         "rotor",
-        allow_abbrev=False,
         parents=parents,
         help="a rotor on two bearings: experiment | campbell | sensitivity | unbalance",
     )
