@@ -14,7 +14,7 @@ from .._params import PID, Rig
 from .._toml import load_rig
 from ..calibration._cli import FITTABLE, PLAIN_PERIODS, read_estimate, records, same_controller
 from ..controllers import load_controller, recorded_controller
-from ._options import _started, check_output
+from ._options import UsageError, _option_names, _started, check_output
 
 _RIG_FIELDS = {f.name for f in fields(Rig)} - {"force_law"}
 _PID_FIELDS = ("kp", "ki", "kd", "derivative_cutoff", "fs", "delay")
@@ -197,14 +197,15 @@ def add_design_parser(subparsers: Any, parents: list[argparse.ArgumentParser]) -
                                    help="choose PID gains for a target actual stiffness and damping")  # fmt: skip
     design.add_argument("--stiffness", type=float, help="target actual stiffness (N/m)")
     design.add_argument("--damping", type=float, help="target actual damping (N s/m)")
-    design.add_argument("--band", type=_band, default=(20.0, 150.0), help="design band 'low:high' (Hz; default 20:150)")
+    design.add_argument("--band", type=_band, help="design band 'low:high' (Hz; default 20:150, or up to the "
+                        "controller's fs/2 when that is lower)")  # fmt: skip
     design.add_argument("--step", type=float, default=1.0, help="frequency step in the band (Hz; default 1)")
     design.add_argument("--free", type=_names, default=["kp", "kd"], help="parameters to choose (default kp,kd)")
     design.add_argument("--max-sensitivity", type=float, help="limit of the sensitivity peak |S| (e.g. 3: zone A)")
     design.add_argument("--out", type=Path, help="write the designed controller to a controller file (.toml; "
                         "`run --controller`, amb_fast.load_controller read it)")  # fmt: skip
     _add_controller_options(design, several=False)
-    design.set_defaults(func=cmd_design)
+    design.set_defaults(func=cmd_design, option_names=_option_names("stiffness", "damping", "max-sensitivity", "free"))
 
 
 def cmd_design(args: argparse.Namespace) -> None:
@@ -212,13 +213,19 @@ def cmd_design(args: argparse.Namespace) -> None:
         check_output(args.out, "--out", (".toml",), args.overwrite)
     if args.stiffness is None and args.damping is None:
         raise ValueError("give --stiffness and/or --damping")
-    low, high = args.band
+    low, high = (20.0, 150.0) if args.band is None else args.band
     if not (0 < low < high) or args.step <= 0:
         raise ValueError(f"--band must be 0 < low < high and --step > 0, got {low}:{high}, step {args.step}")
-    freq = np.arange(low, high + 0.5 * args.step, args.step)
     rig = _rig(args)
     ((options, file),) = _controller_options(args, 1)
     controller = file[1] if file is not None else replace(PID.paper(), **options)
+    freq = np.arange(low, high + 0.5 * args.step, args.step)
+    nyquist = controller.fs / 2
+    if args.band is None:  # the default follows the controller's fs (--fs 200: 20-99 Hz)
+        freq = freq[freq < nyquist]
+    if freq.size == 0 or freq[-1] >= nyquist:
+        raise UsageError(f"--band must lie below fs/2 = {nyquist:g} Hz (the controller samples at {controller.fs:g} "
+                         f"Hz), got {low:g}:{high:g}")  # fmt: skip
     kwargs: dict[str, Any] = dict(freq=freq, stiffness=args.stiffness, damping=args.damping, free=args.free,
                                   max_sensitivity=args.max_sensitivity)  # fmt: skip
     from ..calibration import design_controller  # scipy.optimize: only for this command

@@ -15,7 +15,7 @@ from .._experiment import Estimate, identify, run_experiment
 from .._linear import AnyController, closed_loop_poles, require_stable, stability_margin
 from .._sweep import RIG_FIELDS, controller_params, sweep
 from .._sweep_result import SWEPT
-from .._validate import integer
+from .._validate import integer, real
 from ..claims import natural_frequency
 from ..io import load_recording
 from ..two_axis import run_two_axis
@@ -82,11 +82,14 @@ def cmd_run(args: argparse.Namespace) -> None:
     integer("--periods", args.periods, 2)
     if args.settle_periods is not None:
         integer("--settle-periods", args.settle_periods, 0)
+    cross = {"kxy": "N/m", "kyx": "N/m", "cxy": "N s/m", "cyx": "N s/m", "sensor_angle": "rad", "cross_kp": "A/m"}
+    for name, unit in cross.items():  # here, not in the run: a NaN is an input mistake, named by its option
+        real("--" + name.replace("_", "-"), getattr(args, name), unit)
     if args.two_axis:
         _started(args)
         run_two_axis(args, rig, pid, excitation)
         return
-    if any(getattr(args, name) for name in ("kxy", "kyx", "cxy", "cyx", "sensor_angle", "cross_kp")):
+    if any(getattr(args, name) for name in cross):
         raise UsageError("--kxy, --kyx, --cxy, --cyx, --sensor-angle and --cross-kp need --two-axis")
     require_stable(rig, pid)
     _started(args)

@@ -58,6 +58,8 @@ def _unbalance(text: str) -> list[tuple[float, float, float]]:
         me, z, phase = (float(v) for v in text.split(","))
     except ValueError:
         raise UsageError(f"--unbalance must be 'm_e,z,phase' (kg m, m, rad), got {text!r}") from None
+    if not np.all(np.isfinite([me, z, phase])):  # an input mistake (exit status 2), not a failed run
+        raise UsageError(f"--unbalance must be finite numbers 'm_e,z,phase' (kg m, m, rad), got {text!r}")
     return [(me, z, phase)]
 
 
