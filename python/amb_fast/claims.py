@@ -146,7 +146,7 @@ def ki_acts_at_low_frequency_only(freq: np.ndarray, gains: np.ndarray, receptanc
 
 def ki_lowers_low_frequency_damping(freq: np.ndarray, gains: np.ndarray, c: np.ndarray) -> Claim:
     low = _low(freq, c)
-    change = _change(low)
+    change = float(_change(low))
     ok = _decreasing(low) and change > 0.2
     return Claim(
         "3.2.1-c", "3.2.1", "Damping decreases significantly with increasing Ki at low frequency.",
@@ -176,7 +176,7 @@ def ki_raises_stiffness_near_resonance_marginally(
 ) -> Claim:
     fn = np.array([natural_frequency(freq, h) for h in H])
     around = k[:, _band(freq, fn[len(fn) // 2] - 5, fn[len(fn) // 2] + 5)].mean(axis=1)
-    change = _change(around)
+    change = float(_change(around))
     ok = _increasing(around) and change < 0.01 and _increasing(fn)
     return Claim(
         "3.2.1-f", "3.2.1", "Around the natural frequency the actual stiffness increases marginally with Ki, so the "

@@ -10,8 +10,7 @@ only with ``--debug``. Warnings are one line each, ``amb-fast: warning: ...``. N
 overwritten without ``--overwrite``, and every file is written atomically.
 
 Modules: ``_options`` (shared options, output checks, the model), ``_commands`` (run, sweep, identify,
-paper); ``fit`` and ``design`` live in :mod:`amb_fast.calibration`, the two-axis options in
-:mod:`amb_fast.two_axis`.
+paper), ``_calibrate`` (fit, design), ``_rotor`` (rotor); the two-axis options live in :mod:`amb_fast.two_axis`.
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 import re
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, NoReturn
@@ -188,15 +188,15 @@ def _model(args: argparse.Namespace, *, gains: bool = True) -> tuple[Rig, AnyCon
     """The paper's rig and controller with the options that were given (the others are absent); the
     controller of ``--controller FILE`` instead of the PID when given."""
 
-    def present(names: list[str]) -> dict[str, object]:
+    def present(names: list[str]) -> dict[str, Any]:
         return {name: getattr(args, name) for name in names if hasattr(args, name)}
 
     rig_changes = present([*_attributes(RIG_OPTIONS), "force_law"])
     pid_changes = present([n for n in [*_attributes(PID_OPTIONS), "delay"] if gains or n not in GAINS])
     base = Rig.paper() if getattr(args, "rig", None) is None else load_rig(args.rig)
-    rig = replace(base, **rig_changes)  # type: ignore[arg-type]
+    rig = replace(base, **rig_changes)
     if getattr(args, "controller", None) is None:
-        return rig, replace(PID.paper(), **pid_changes)  # type: ignore[arg-type]
+        return rig, replace(PID.paper(), **pid_changes)
     if pid_changes:
         given = ", ".join("--" + name.replace("_", "-") for name in pid_changes)
         raise UsageError(f"{given} cannot go with --controller (the file sets the controller, its fs and delay)")
@@ -205,7 +205,7 @@ def _model(args: argparse.Namespace, *, gains: bool = True) -> tuple[Rig, AnyCon
     return rig, load_controller(args.controller)
 
 
-def _attributes(options: Sequence[str]) -> list[str]:
+def _attributes(options: Iterable[str]) -> list[str]:
     """The attribute (and Rig or PID field) names of options: ``bias-current`` -> ``bias_current``."""
     return [option.replace("-", "_") for option in options]
 

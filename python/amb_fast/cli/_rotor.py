@@ -82,6 +82,8 @@ def cmd_rotor(args: argparse.Namespace) -> None:
         raise UsageError(f"--speeds must be finite speeds in rad/s, got {args.speeds}")
     if args.step in ("sensitivity", "experiment"):  # options are mistakes before the run (exit 2), not failed runs
         integer("--periods", args.periods, 2)
+        if args.speeds is not None:  # at the first speed given
+            rig = rig.at_speed(float(args.speeds[0]))
     _started(args)
     meta = {"command": f"rotor {args.step}", "rotor": str(args.rotor or "RotorRig.example()")}
     if args.step == "experiment":
@@ -95,8 +97,6 @@ def cmd_rotor(args: argparse.Namespace) -> None:
 
 
 def _experiment(rig: RotorRig, pid: Any, args: argparse.Namespace, meta: dict) -> None:
-    if args.speeds is not None:
-        rig = rig.at_speed(float(args.speeds[0]))
     amb = args.exciter == "amb"
     unit = "A" if amb else "N"
     rms = args.rms if args.rms is not None else (1.0 if amb else 10.0)  # 10 N: a 10 kg rotor moves ~ 1 um
@@ -142,8 +142,6 @@ def _campbell(rig: RotorRig, pid: Any, speeds: np.ndarray, args: argparse.Namesp
 
 
 def _sensitivity(rig: RotorRig, pid: Any, args: argparse.Namespace) -> None:
-    if args.speeds is not None:
-        rig = rig.at_speed(float(args.speeds[0]))
     # 2-1000 Hz, or up to the highest line below the controller's fs/2 when that is lower (a default follows fs)
     sphs = schroeder_multisine(f0=2.0, f_max=default_f_max(2.0, pid.fs, 1000.0), rms=1e-6, fs=pid.fs)
     measured = measure_sensitivity(rig, pid, sphs, periods=args.periods, seed=args.seed)
