@@ -278,3 +278,30 @@ def test_the_default_sweep_file_needs_no_extra(capsys, tmp_path, monkeypatch) ->
     assert status == 0 and "wrote sweep.npz" in out
     assert af.load_sweep(tmp_path / "sweep.npz").status.tolist() == ["ok"]
     assert not (tmp_path / "sweep.nc").exists()
+
+
+@pytest.mark.parametrize(
+    ("option", "shown"),
+    [("--cross-kp", "--cross-kp must be a finite number (A/m), got nan"),
+     ("--sensor-angle", "--sensor-angle must be a finite number (rad), got nan"),
+     ("--kyx", "--kyx must be a finite number (N/m), got nan")],
+)  # fmt: skip
+def test_a_two_axis_nan_is_an_input_mistake_named_by_its_option(capsys, option, shown) -> None:
+    """They were found in the run (exit status 1), and a NaN --cross-kp was reported as "--kp"."""
+    status, _, err = run(capsys, "run", "--two-axis", "--periods", "2", option, "nan")
+    assert status == 2 and one_error_line(err) == f"amb-fast: error: {shown}"
+
+
+def test_the_default_design_band_follows_the_controllers_fs(capsys, tmp_path) -> None:
+    """`design --fs 200` failed (exit status 1, the band's 131 frequencies printed): the default band 20-150 Hz
+    reached above fs/2; it now ends at the last step below fs/2, and a band given above it is an input mistake."""
+    out = tmp_path / "c.toml"
+    status, printed, err = run(capsys, "design", "--stiffness", "6e4", "--fs", "200", "--out", str(out))
+    assert status == 0, err
+    assert af.load_controller(out).fs == 200.0 and "naive design" in printed
+    status, _, err = run(capsys, "design", "--stiffness", "6e4", "--fs", "200", "--band", "20:150")
+    assert status == 2
+    assert one_error_line(err) == ("amb-fast: error: --band must lie below fs/2 = 100 Hz (the controller samples at "
+                                   "200 Hz), got 20:150")  # fmt: skip
+    status, _, err = run(capsys, "design", "--stiffness", "6e4", "--max-sensitivity", "-1")
+    assert status == 1 and one_error_line(err).startswith("amb-fast: error: --max-sensitivity must be a number > 1")

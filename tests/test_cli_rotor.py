@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import amb_fast as af
-from cli_helpers import run
+from cli_helpers import one_error_line, run
 
 
 def test_campbell_sensitivity_and_unbalance_of_the_example(capsys, tmp_path) -> None:  # noqa: ANN001
@@ -81,3 +81,11 @@ def test_the_experiment_step_prints_the_bearings_coefficients(capsys, tmp_path) 
 def test_the_experiment_steps_options_are_checked_first(capsys, options, message) -> None:  # noqa: ANN001
     status, _, err = run(capsys, "rotor", *options)
     assert status == 2 and message in err and "Traceback" not in err
+
+
+def test_a_nan_unbalance_is_an_input_mistake(capsys) -> None:  # noqa: ANN001
+    """It was found in the run (exit status 1) and named ``unbalance[0][1]``, not the option."""
+    status, _, err = run(capsys, "rotor", "unbalance", "--unbalance", "1e-4,nan,0")
+    assert status == 2
+    assert one_error_line(err) == ("amb-fast: error: --unbalance must be finite numbers 'm_e,z,phase' (kg m, m, rad), "
+                                   "got '1e-4,nan,0'")  # fmt: skip

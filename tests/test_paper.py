@@ -210,3 +210,22 @@ def test_figures_are_reachable_from_the_package(study) -> None:
     assert len(fig.axes[0].get_legend().get_texts()) == 3
     with pytest.raises(AttributeError):
         af.plot_nothing  # noqa: B018
+
+
+@pytest.mark.parametrize("suffix", [".nc", ".npz"])
+def test_paper_names_the_family_files_it_writes(tmp_path, capsys, monkeypatch, suffix) -> None:
+    """Without xarray the families are written as .npz; the closing line said ".csv/.nc" all the same."""
+    from types import SimpleNamespace
+
+    from amb_fast import paper
+
+    claim = claims.Claim("4", "4", "statement", "metric", "measured", True)
+    monkeypatch.setattr(paper, "paper_study", lambda **kw: SimpleNamespace(claims=lambda: [claim]))
+    monkeypatch.setattr(paper, "write_curves", lambda study, out: [])
+    monkeypatch.setattr(paper, "write_figures", lambda study, out: [])
+    monkeypatch.setattr(paper, "report", lambda study, table: table)
+    monkeypatch.setattr(paper, "_family_suffix", lambda: suffix)
+    paper.write_paper(tmp_path, progress=False)
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert last.endswith("family_ki.csv/" + suffix + ", family_kd.csv/" + suffix + ", family_kp.csv/" + suffix)
+    assert set(paper.output_names()) >= {f"family_{g}{suffix}" for g in ("ki", "kd", "kp")}

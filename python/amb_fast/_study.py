@@ -52,15 +52,8 @@ class PaperStudy(ArrayRecord):
 
     def family_data(self) -> dict[str, dict[str, np.ndarray]]:
         """Per gain: ``gains`` and, one row per gain, ``k``, ``c`` (median filtered) and ``H`` (F/Y)."""
-        return {
-            name: {
-                "gains": result.points[name],
-                "k": result.k_smooth,
-                "c": result.c_smooth,
-                "H": result.H,
-            }
-            for name, result in self.families.items()
-        }
+        return {name: {"gains": r.points[name], "k": r.k_smooth, "c": r.c_smooth, "H": r.H}
+                for name, r in self.families.items()}  # fmt: skip
 
     def claims(self) -> list[claim_checks.Claim]:
         """Every observation of the paper, checked on this study's data."""
@@ -87,18 +80,9 @@ def paper_study(
     require(len(scales) >= 3, "scales", scales, "at least three gain multipliers")
     estimate = run_experiment(rig, pid, excitation, periods=periods, seed=seed)
     k_eff, c_eff = effective_coefficients(rig, pid, estimate.freq)
-    families = {
-        name: sweep(
-            rig,
-            pid,
-            excitation,
-            **{name: getattr(pid, name) * np.array(scales)},
-            periods=periods,
-            seed=seed + 1 + j,
-            progress=progress,
-        )  # fmt: skip
-        for j, name in enumerate(GAINS)
-    }
+    families = {name: sweep(rig, pid, excitation, **{name: getattr(pid, name) * np.array(scales)}, periods=periods,
+                            seed=seed + 1 + j, progress=progress)
+                for j, name in enumerate(GAINS)}  # fmt: skip
     for name, result in families.items():
         bad = result.status != "ok"
         if bad.any():

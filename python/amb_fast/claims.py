@@ -8,7 +8,7 @@ returns a :class:`Claim` with the metric, the measured values and the verdict.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,6 +28,16 @@ class Claim:
 
 def _band(freq: np.ndarray, lo: float, hi: float) -> np.ndarray:
     return (freq >= lo) & (freq <= hi)
+
+
+def _low(freq: np.ndarray, family: np.ndarray) -> np.ndarray:
+    """Per member of a family: the mean over the lines at 1-10 Hz."""
+    return family[:, _band(freq, 1, 10)].mean(axis=1)
+
+
+def _change(family: np.ndarray) -> np.ndarray:
+    """The change across a family (last - first), relative to its middle member."""
+    return np.abs(family[-1] - family[0]) / np.abs(family[len(family) // 2])
 
 
 def _increasing(values: np.ndarray) -> bool:
@@ -135,8 +145,8 @@ def ki_acts_at_low_frequency_only(freq: np.ndarray, gains: np.ndarray, receptanc
 
 
 def ki_lowers_low_frequency_damping(freq: np.ndarray, gains: np.ndarray, c: np.ndarray) -> Claim:
-    low = c[:, _band(freq, 1, 10)].mean(axis=1)
-    change = abs(low[-1] - low[0]) / abs(low[len(low) // 2])
+    low = _low(freq, c)
+    change = float(_change(low))
     ok = _decreasing(low) and change > 0.2
     return Claim(
         "3.2.1-c", "3.2.1", "Damping decreases significantly with increasing Ki at low frequency.",
@@ -146,7 +156,7 @@ def ki_lowers_low_frequency_damping(freq: np.ndarray, gains: np.ndarray, c: np.n
 
 
 def ki_attenuates_low_frequency_response(freq: np.ndarray, gains: np.ndarray, receptance: np.ndarray) -> Claim:
-    low = np.abs(receptance)[:, _band(freq, 1, 10)].mean(axis=1)
+    low = _low(freq, np.abs(receptance))
     return Claim(
         "3.2.1-d", "3.2.1", "Increasing Ki attenuates the dynamic response at low frequency.",
         "mean |Y/F| at 1-10 Hz strictly decreasing with Ki", _fmt(low, "m/N"), _decreasing(low),
@@ -154,7 +164,7 @@ def ki_attenuates_low_frequency_response(freq: np.ndarray, gains: np.ndarray, re
 
 
 def ki_raises_low_frequency_stiffness(freq: np.ndarray, gains: np.ndarray, k: np.ndarray) -> Claim:
-    low = k[:, _band(freq, 1, 10)].mean(axis=1)
+    low = _low(freq, k)
     return Claim(
         "3.2.1-e", "3.2.1", "Stiffness at low frequency increases with Ki (Fig. 6).",
         "mean k at 1-10 Hz strictly increasing with Ki", _fmt(low, "N/m", 6), _increasing(low),
@@ -165,9 +175,8 @@ def ki_raises_stiffness_near_resonance_marginally(
     freq: np.ndarray, gains: np.ndarray, k: np.ndarray, H: np.ndarray
 ) -> Claim:
     fn = np.array([natural_frequency(freq, h) for h in H])
-    near = _band(freq, fn[len(fn) // 2] - 5, fn[len(fn) // 2] + 5)
-    around = k[:, near].mean(axis=1)
-    change = abs(around[-1] - around[0]) / around[len(around) // 2]
+    around = k[:, _band(freq, fn[len(fn) // 2] - 5, fn[len(fn) // 2] + 5)].mean(axis=1)
+    change = float(_change(around))
     ok = _increasing(around) and change < 0.01 and _increasing(fn)
     return Claim(
         "3.2.1-f", "3.2.1", "Around the natural frequency the actual stiffness increases marginally with Ki, so the "
@@ -197,8 +206,7 @@ def kd_reduces_resonance_peak(freq: np.ndarray, gains: np.ndarray, c: np.ndarray
 
 
 def kd_changes_stiffness_at_high_frequency_only(freq: np.ndarray, gains: np.ndarray, k: np.ndarray) -> Claim:
-    low = k[:, _band(freq, 1, 10)].mean(axis=1)
-    high = k[:, _band(freq, 150, np.inf)].mean(axis=1)
+    low, high = _low(freq, k), k[:, _band(freq, 150, np.inf)].mean(axis=1)
     change_low = np.ptp(low) / abs(low[len(low) // 2])
     change_high = np.ptp(high) / abs(high[len(high) // 2])
     ok = change_low < 0.02 and change_high > 0.2
@@ -226,7 +234,7 @@ def kp_raises_stiffness_and_natural_frequency(
 
 
 def kp_raises_low_frequency_damping(freq: np.ndarray, gains: np.ndarray, c: np.ndarray, H: np.ndarray) -> Claim:
-    low_c = c[:, _band(freq, 1, 10)].mean(axis=1)
+    low_c = _low(freq, c)
     fn = natural_frequency(freq, H[0])
     below = np.abs(1 / H)[:, freq < 0.8 * fn].mean(axis=1)
     ok = _increasing(low_c) and _decreasing(below)
@@ -244,12 +252,7 @@ def kp_raises_low_frequency_damping(freq: np.ndarray, gains: np.ndarray, c: np.n
 
 def every_gain_moves_stiffness_and_damping(families: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> Claim:
     """``families``: gain name -> (k, c), each (family members, lines)."""
-    moves = {}
-    for name, (k, c) in families.items():
-        base = len(k) // 2
-        moves[name] = tuple(
-            float(np.max(np.abs(x[-1] - x[0]) / np.abs(x[base]))) for x in (k, c)
-        )  # fmt: skip
+    moves = {name: (float(np.max(_change(k))), float(np.max(_change(c)))) for name, (k, c) in families.items()}
     ok = all(min(m) > 0.01 for m in moves.values())
     shown = "; ".join(f"{n}: k {m[0] * 100:.3g} %, c {m[1] * 100:.3g} %" for n, m in moves.items())
     return Claim(
@@ -267,23 +270,22 @@ def check_all(
 ) -> list[Claim]:
     """Every check. ``families[name]`` has ``gains``, ``k``, ``c`` and ``H`` (F/Y), one row per gain."""
     ki, kd, kp = families["ki"], families["kd"], families["kp"]
-    checks: list[Callable[[], Claim]] = [
-        lambda: effective_frequency_dependent_and_smooth(freq, k_eff, c_eff),
-        lambda: damping_actual_matches_effective(freq, c, c_eff),
-        lambda: stiffness_agrees_low_diverges_high(freq, k, k_eff),
-        lambda: ki_raises_resonance_peak(freq, ki["gains"], 1 / ki["H"]),
-        lambda: ki_acts_at_low_frequency_only(freq, ki["gains"], 1 / ki["H"]),
-        lambda: ki_lowers_low_frequency_damping(freq, ki["gains"], ki["c"]),
-        lambda: ki_attenuates_low_frequency_response(freq, ki["gains"], 1 / ki["H"]),
-        lambda: ki_raises_low_frequency_stiffness(freq, ki["gains"], ki["k"]),
-        lambda: ki_raises_stiffness_near_resonance_marginally(freq, ki["gains"], ki["k"], ki["H"]),
-        lambda: kd_reduces_resonance_peak(freq, kd["gains"], kd["c"], kd["H"]),
-        lambda: kd_changes_stiffness_at_high_frequency_only(freq, kd["gains"], kd["k"]),
-        lambda: kp_raises_stiffness_and_natural_frequency(freq, kp["gains"], kp["k"], kp["H"]),
-        lambda: kp_raises_low_frequency_damping(freq, kp["gains"], kp["c"], kp["H"]),
-        lambda: every_gain_moves_stiffness_and_damping({n: (f["k"], f["c"]) for n, f in families.items()}),
+    return [
+        effective_frequency_dependent_and_smooth(freq, k_eff, c_eff),
+        damping_actual_matches_effective(freq, c, c_eff),
+        stiffness_agrees_low_diverges_high(freq, k, k_eff),
+        ki_raises_resonance_peak(freq, ki["gains"], 1 / ki["H"]),
+        ki_acts_at_low_frequency_only(freq, ki["gains"], 1 / ki["H"]),
+        ki_lowers_low_frequency_damping(freq, ki["gains"], ki["c"]),
+        ki_attenuates_low_frequency_response(freq, ki["gains"], 1 / ki["H"]),
+        ki_raises_low_frequency_stiffness(freq, ki["gains"], ki["k"]),
+        ki_raises_stiffness_near_resonance_marginally(freq, ki["gains"], ki["k"], ki["H"]),
+        kd_reduces_resonance_peak(freq, kd["gains"], kd["c"], kd["H"]),
+        kd_changes_stiffness_at_high_frequency_only(freq, kd["gains"], kd["k"]),
+        kp_raises_stiffness_and_natural_frequency(freq, kp["gains"], kp["k"], kp["H"]),
+        kp_raises_low_frequency_damping(freq, kp["gains"], kp["c"], kp["H"]),
+        every_gain_moves_stiffness_and_damping({n: (f["k"], f["c"]) for n, f in families.items()}),
     ]
-    return [check() for check in checks]
 
 
 def markdown(claims: list[Claim]) -> str:

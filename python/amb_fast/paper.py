@@ -90,23 +90,23 @@ def write_figures(study: PaperStudy, out: Path) -> list[Path]:
     import matplotlib
     import matplotlib.pyplot as plt
 
-    from .io._results import figure_metadata
+    from .io import figure_metadata
     from .plots import plot_actual, plot_effective, plot_family, plot_overlay
 
     fn = claim_checks.natural_frequency(study.freq, study.estimate.H)
     zoom = (max(1.0, fn - 15.0), fn + 15.0)
-    figures: dict[str, Callable[[], Figure]] = {
-        "fig4_effective.png": lambda: plot_effective(study),
-        "fig5_actual.png": lambda: plot_actual(study.estimate),
-        "fig5_overlay.png": lambda: plot_overlay(study.estimate, study.k_eff, study.c_eff),
-        "fig6_ki.png": lambda: plot_family(study.families["ki"], "ki", inset=zoom),
-        "fig7_ki_zoom.png": lambda: plot_family(study.families["ki"], "ki", zoom=zoom),
-        "fig8_kd.png": lambda: plot_family(study.families["kd"], "kd", inset=zoom),
-        "fig9_kd_zoom.png": lambda: plot_family(study.families["kd"], "kd", zoom=zoom),
-        "fig10_kp.png": lambda: plot_family(study.families["kp"], "kp"),
-    }
+    draws: list[Callable[[], Figure]] = [  # in the order of FIGURES
+        lambda: plot_effective(study),
+        lambda: plot_actual(study.estimate),
+        lambda: plot_overlay(study.estimate, study.k_eff, study.c_eff),
+        lambda: plot_family(study.families["ki"], "ki", inset=zoom),
+        lambda: plot_family(study.families["ki"], "ki", zoom=zoom),
+        lambda: plot_family(study.families["kd"], "kd", inset=zoom),
+        lambda: plot_family(study.families["kd"], "kd", zoom=zoom),
+        lambda: plot_family(study.families["kp"], "kp"),
+    ]
     stamp = figure_metadata({"rig": study.rig, "controller": study.pid, "seed": study.estimate.meta.get("seed")})
-    for name, draw in figures.items():  # one at a time: drawn, saved, closed
+    for name, draw in zip(FIGURES, draws):  # one at a time: drawn, saved, closed
         # Laid out at the resolution it is saved at: the layout measures the text with the renderer that savefig
         # then draws with, so savefig finds every text size (on log axes, mathtext) measured already.
         with matplotlib.rc_context({"figure.dpi": DPI}):
@@ -114,7 +114,7 @@ def write_figures(study: PaperStudy, out: Path) -> list[Path]:
         with atomic_path(out / name) as target:
             fig.savefig(target, dpi=DPI, format="png", metadata=stamp)
         plt.close(fig)
-    return [out / name for name in figures]
+    return [out / name for name in FIGURES]
 
 
 def report(study: PaperStudy, table: str) -> str:
@@ -156,5 +156,5 @@ def write_paper(out: Path, *, seed: int = 2026, progress: bool = True) -> list[c
     atomic_text(out / "claims.md", report(study, table))
     print(table)
     print(f"wrote {out}/: {', '.join(FIGURES)}, claims.md, effective.csv, actual.csv, "
-          + ", ".join(f"family_{g}.csv/.nc" for g in GAINS))  # fmt: skip
+          + ", ".join(f"family_{g}.csv/{_family_suffix()}" for g in GAINS))  # fmt: skip
     return claims

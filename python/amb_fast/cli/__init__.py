@@ -10,8 +10,7 @@ only with ``--debug``. Warnings are one line each, ``amb-fast: warning: ...``. N
 overwritten without ``--overwrite``, and every file is written atomically.
 
 Modules: ``_options`` (shared options, output checks, the model), ``_commands`` (run, sweep, identify,
-paper); ``fit`` and ``design`` live in :mod:`amb_fast.calibration`, the two-axis options in
-:mod:`amb_fast.two_axis`.
+paper), ``_calibrate`` (fit, design), ``_rotor`` (rotor); the two-axis options live in :mod:`amb_fast.two_axis`.
 """
 
 from __future__ import annotations
@@ -28,6 +27,7 @@ from pathlib import Path
 from .._errors import TouchdownError
 from ..io import version
 from ..two_axis import add_two_axis_options
+from ._calibrate import add_design_parser, add_fit_parser
 from ._commands import (
     cmd_identify,
     cmd_paper,
@@ -35,6 +35,7 @@ from ._commands import (
     cmd_sweep,
 )
 from ._options import (
+    GAINS,
     IDENTIFY_OPTION_NAMES,
     MODEL_OPTION_NAMES,
     PID_OPTIONS,
@@ -56,7 +57,6 @@ def build_parser() -> argparse.ArgumentParser:
     common.add_argument("--debug", action="store_true", help="show the traceback of an error")
     parser = _Parser(
         prog="amb-fast",
-        allow_abbrev=False,
         description="Simulate and identify a digitally controlled active magnetic bearing (paper rig by default). "
         "SI units: N, m, A, s, kg; frequencies in Hz; gains kp A/m, ki A/(m s), kd A s/m.",
     )
@@ -64,18 +64,14 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="{paper,run,sweep,identify,fit,design,rotor}",
                                 parser_class=_Parser)  # fmt: skip
 
-    paper = sub.add_parser(
-        "paper",
-        allow_abbrev=False,
-        parents=[common],
-        help="reproduce the paper: figures, curves (CSV, NetCDF) and claims report",
-    )
+    paper = sub.add_parser("paper", parents=[common],
+                           help="reproduce the paper: figures, curves (CSV, NetCDF) and claims report")  # fmt: skip
     paper.add_argument("--out", type=Path, default=Path("paper-output"), help="output folder (default paper-output)")
     paper.add_argument("--seed", type=int, default=2026, help="seed of the measurement noise")
     paper.add_argument("--no-progress", action="store_true", help="no progress lines")
     paper.set_defaults(func=cmd_paper, option_names={})
 
-    run = sub.add_parser("run", allow_abbrev=False, parents=[common], help="one SPHS experiment; prints a summary")
+    run = sub.add_parser("run", parents=[common], help="one SPHS experiment; prints a summary")
     _add_model_options(run)
     run.add_argument("--at", type=_values, help=AT_HELP)
     run.add_argument("--save", type=Path, help="write the estimate (.csv or .nc; load with amb_fast.load_estimate; "
@@ -84,10 +80,11 @@ def build_parser() -> argparse.ArgumentParser:
     add_two_axis_options(run)
     run.set_defaults(func=cmd_run, option_names=MODEL_OPTION_NAMES)
 
-    sw = sub.add_parser("sweep", allow_abbrev=False, parents=[common],
+    sw = sub.add_parser("sweep", parents=[common],
                         help="a grid of gains, rig fields or controller parameters to .nc, .npz or .csv")  # fmt: skip
     _add_model_options(sw, gains=False)
-    for name, (_, unit, text) in list(PID_OPTIONS.items())[:3]:
+    for name in GAINS:
+        unit, text = PID_OPTIONS[name]
         sw.add_argument(f"--{name}", type=_values, help=f"{text} values ({unit}): 'a,b,c' or 'start:stop:count'")
     sw.add_argument("--vary", action="append", default=[], metavar="NAME=VALUES",
                     help="sweep any rig field or controller parameter, as amb_fast.sweep does: a Rig field "
@@ -101,47 +98,28 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--no-progress", action="store_true", help="no progress bar")
     sw.set_defaults(func=cmd_sweep, option_names=MODEL_OPTION_NAMES)
 
-    ident = sub.add_parser(
-        "identify",
-        allow_abbrev=False,
-        parents=[common],
-        help="k and c from a recording (.csv/.tsv/.txt with named columns, .mat incl. v7.3, .tdms)",
-    )
+    ident = sub.add_parser("identify", parents=[common], help="k and c from a recording (.csv/.tsv/.txt with named "
+                           "columns, .mat incl. v7.3, .tdms)")  # fmt: skip
     ident.add_argument("file", type=Path, help="recording: .csv/.tsv/.txt (a header names the columns), .mat, .tdms")
-    ident.add_argument(
-        "--force",
-        default="force",
-        help="force channel: name or 0-based column index (N, or a unit in its name; default 'force')",
-    )
-    ident.add_argument(
-        "--displacement",
-        default="displacement",
-        help="displacement channel: name or 0-based column index (m, or a unit in its name)",
-    )
+    ident.add_argument("--force", default="force", help="force channel: name or 0-based column index (N, or a unit "
+                       "in its name; default 'force')")  # fmt: skip
+    ident.add_argument("--displacement", default="displacement", help="displacement channel: name or 0-based column "
+                       "index (m, or a unit in its name)")  # fmt: skip
     ident.add_argument("--time", metavar="NAME|INDEX",
                        help="time column (s, or ms/us by its unit): name or 0-based index; 'none' to ignore it "
                        "(default: the reader's time column)")  # fmt: skip
     ident.add_argument("--recording", help="which recording of a file that holds several (dSPACE export, TDMS group)")
-    ident.add_argument(
-        "--fs", type=float, help="sampling frequency (Hz; default: from 'fs' or the time column, which it must match)"
-    )
+    ident.add_argument("--fs", type=float, help="sampling frequency (Hz; default: from 'fs' or the time column, which "
+                       "it must match)")  # fmt: skip
     ident.add_argument("--clearance", type=float, help="mechanical clearance (m): warn if the displacement exceeds it")
     ident.add_argument("--f0", type=float, default=1.0, help="fundamental (Hz; default 1)")
     ident.add_argument("--mass", type=float, help="known moving mass of paper eq. 9 (kg); needed unless the file "
                        "records it (a file amb_fast wrote)")  # fmt: skip
     ident.add_argument("--f-max", type=float, help="highest excited line (Hz; default: detected from the force)")
-    ident.add_argument(
-        "--lines",
-        type=_values,
-        metavar="F1,F2,...",
-        help="take exactly these lines (Hz, multiples of --f0; 'a,b,c' or 'start:stop:count')",
-    )
-    ident.add_argument(
-        "--settle-periods",
-        type=int,
-        default=0,
-        help="periods to skip at the start (a warning says when a transient is left in)",
-    )
+    ident.add_argument("--lines", type=_values, metavar="F1,F2,...", help="take exactly these lines (Hz, multiples of "
+                       "--f0; 'a,b,c' or 'start:stop:count')")  # fmt: skip
+    ident.add_argument("--settle-periods", type=int, default=0,
+                       help="periods to skip at the start (a warning says when a transient is left in)")  # fmt: skip
     ident.add_argument("--median-window", type=int, default=5, help="median filter width (lines, odd)")
     ident.add_argument("--at", type=_values, help=AT_HELP)
     ident.add_argument("--figure", type=Path, help="write the figure here (.png, .pdf or .svg) instead of "
@@ -149,8 +127,6 @@ def build_parser() -> argparse.ArgumentParser:
     ident.add_argument("--out", type=Path, default=Path("identify-output"), help="output folder (estimate.csv, "
                        "estimate.png)")  # fmt: skip
     ident.set_defaults(func=cmd_identify, option_names=IDENTIFY_OPTION_NAMES)
-
-    from ..calibration._cli import add_design_parser, add_fit_parser
 
     add_fit_parser(sub, parents=[common])
     add_design_parser(sub, parents=[common])

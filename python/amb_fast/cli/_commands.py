@@ -13,10 +13,9 @@ import numpy as np
 
 from .._experiment import Estimate, identify, run_experiment
 from .._linear import AnyController, closed_loop_poles, require_stable, stability_margin
-from .._params import Rig
 from .._sweep import RIG_FIELDS, controller_params, sweep
 from .._sweep_result import SWEPT
-from .._validate import integer
+from .._validate import integer, real
 from ..claims import natural_frequency
 from ..io import load_recording
 from ..two_axis import run_two_axis
@@ -34,10 +33,10 @@ from ._options import (
     _save_figure,
     _started,
     _values,
-    check_at,
+    at_lines,
     check_output,
     check_output_dir,
-    default_at,
+    check_save_and_figure,
 )
 
 
@@ -57,67 +56,54 @@ def natural_frequency_line(estimate: Estimate) -> str:
     return f"natural frequency   none in {band} ({why})"
 
 
-def _table(estimate: Estimate, at: Sequence[float]) -> list[str]:
-    """k and c (with their standard errors) and |Y/F| at the excited lines nearest to ``at`` (Hz); weak lines
-    (force or displacement under 10x the unexcited level) are marked."""
+def _report(estimate: Estimate, at: Sequence[float], *notes: str) -> str:
+    """The natural frequency, the peak of |Y/F|, ``notes``, then k and c (with their standard errors) and |Y/F| at
+    the excited lines nearest to ``at`` (Hz); weak lines (force or displacement under 10x the unexcited level) are
+    marked."""
+    peak = int(np.argmax(np.abs(estimate.receptance)))
     weak = np.zeros(estimate.freq.size, bool) if estimate.weak is None else np.asarray(estimate.weak, bool)
-    lines = [f"{'f (Hz)':>8} {'k (N/m)':>12} {'+-k (N/m)':>10} {'c (N s/m)':>12} {'+-c (N s/m)':>11} "
+    lines = [natural_frequency_line(estimate),
+             f"peak |Y/F|          {abs(estimate.receptance[peak]):.4g} m/N at {estimate.freq[peak]:g} Hz", *notes, "",
+             f"{'f (Hz)':>8} {'k (N/m)':>12} {'+-k (N/m)':>10} {'c (N s/m)':>12} {'+-c (N s/m)':>11} "
              f"{'|Y/F| (m/N)':>12}"]  # fmt: skip
     for f in at:
         i = int(np.argmin(np.abs(estimate.freq - f)))
         lines.append(f"{estimate.freq[i]:8g} {estimate.k[i]:12.6g} {estimate.k_std[i]:10.3g} {estimate.c[i]:12.6g} "
                      f"{estimate.c_std[i]:11.3g} {abs(estimate.receptance[i]):12.4g}"
                      + ("  weak" if weak[i] else ""))  # fmt: skip
-    return lines
-
-
-def _summary(estimate: Estimate, rig: Rig, pid: AnyController, at: Sequence[float]) -> str:
-    margin = stability_margin(rig, pid)
-    peak = int(np.argmax(np.abs(estimate.receptance)))
-    lines = [
-        natural_frequency_line(estimate),
-        f"peak |Y/F|          {abs(estimate.receptance[peak]):.4g} m/N at {estimate.freq[peak]:g} Hz",
-        f"stability margin    peak |S| = {margin.peak:.3f} ({margin.peak_db:.1f} dB) at {margin.frequency:.1f} Hz, "
-        f"ISO 14839-3 zone {margin.zone}",
-        f"slowest pole        |z| = {np.abs(closed_loop_poles(rig, pid)).max():.6f}",
-        f"periods averaged    {estimate.periods}",
-        "",
-        *_table(estimate, at),
-    ]
     return "\n".join(lines)
 
 
 def cmd_run(args: argparse.Namespace) -> None:
-    if args.save:
-        check_output(args.save, "--save", TWO_AXIS_SUFFIXES if args.two_axis else ESTIMATE_SUFFIXES, args.overwrite)
-    if args.figure:
-        check_output(args.figure, "--figure", FIGURE_SUFFIXES, args.overwrite)
-        _needs("matplotlib", "plot", "--figure")
-    if args.save and args.figure and args.save.resolve() == args.figure.resolve():
-        raise UsageError("--save and --figure must be different files")
-    if args.save and args.save.suffix.lower() == ".nc":
-        _needs("h5netcdf", "xarray", "--save .nc")
+    check_save_and_figure(args, TWO_AXIS_SUFFIXES if args.two_axis else ESTIMATE_SUFFIXES)
     rig, pid = _model(args)
     excitation = _excitation(args, pid)
-    if args.at is None:  # the default follows the band of the options given (--f-max 20, --lines odd, --fs 300)
-        args.at = default_at(excitation.freq)
-    else:
-        check_at(args.at, excitation.freq)
+    args.at = at_lines(args.at, excitation.freq)
     integer("--periods", args.periods, 2)
     if args.settle_periods is not None:
         integer("--settle-periods", args.settle_periods, 0)
+    cross = {"kxy": "N/m", "kyx": "N/m", "cxy": "N s/m", "cyx": "N s/m", "sensor_angle": "rad", "cross_kp": "A/m"}
+    for name, unit in cross.items():  # here, not in the run: a NaN is an input mistake, named by its option
+        real("--" + name.replace("_", "-"), getattr(args, name), unit)
     if args.two_axis:
         _started(args)
         run_two_axis(args, rig, pid, excitation)
         return
-    if any(getattr(args, name) for name in ("kxy", "kyx", "cxy", "cyx", "sensor_angle", "cross_kp")):
+    if any(getattr(args, name) for name in cross):
         raise UsageError("--kxy, --kyx, --cxy, --cyx, --sensor-angle and --cross-kp need --two-axis")
     require_stable(rig, pid)
     _started(args)
     estimate = run_experiment(
         rig, pid, excitation, periods=args.periods, settle_periods=args.settle_periods, seed=args.seed
     )
-    print(_summary(estimate, rig, pid, args.at))
+    margin = stability_margin(rig, pid)
+    print(_report(
+        estimate, args.at,
+        f"stability margin    peak |S| = {margin.peak:.3f} ({margin.peak_db:.1f} dB) at {margin.frequency:.1f} Hz, "
+        f"ISO 14839-3 zone {margin.zone}",
+        f"slowest pole        |z| = {np.abs(closed_loop_poles(rig, pid)).max():.6f}",
+        f"periods averaged    {estimate.periods}",
+    ))  # fmt: skip
     if args.save:
         estimate.save(args.save)
         print(f"wrote {args.save}")
@@ -278,20 +264,14 @@ def cmd_identify(args: argparse.Namespace) -> None:
         if "fs" in str(error):
             error.args = (f"{error}; {rec.fs_note()}",)
         raise
-    if args.at is None:
-        args.at = default_at(estimate.freq)
-    else:
-        check_at(args.at, estimate.freq)
+    args.at = at_lines(args.at, estimate.freq)
     _started(args)
     print(f"{args.file}: {rec.force.size} samples at {rec.fs:g} Hz, {estimate.periods} periods, "
           f"{estimate.freq.size} lines from {estimate.freq[0]:g} to {estimate.freq[-1]:g} Hz")  # fmt: skip
     print(f"mass                {mass:g} kg ({mass_from})")
     if estimate.weak is not None and estimate.weak.any():
         print(f"{int(estimate.weak.sum())} weak lines (force or displacement under 10x the unexcited level)")
-    print(natural_frequency_line(estimate))
-    peak = int(np.argmax(np.abs(estimate.receptance)))
-    print(f"peak |Y/F|          {abs(estimate.receptance[peak]):.4g} m/N at {estimate.freq[peak]:g} Hz")
-    print("\n".join(["", *_table(estimate, args.at)]))
+    print(_report(estimate, args.at))
     args.out.mkdir(exist_ok=True)
     estimate.save(args.out / "estimate.csv")
     from ..plots import plot_estimate

@@ -6,10 +6,10 @@ from __future__ import annotations
 import argparse
 import re
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -20,27 +20,28 @@ from .._toml import load_rig
 from ..controllers import load_controller
 from ..io import atomic_path
 
-RIG_OPTIONS = {  # option -> (Rig field, unit, help)
-    "mass": ("mass", "kg", "known moving mass m of eq. 9"),
-    "kyy": ("kyy", "N/m", "position stiffness of the magnet pair (negative)"),
-    "kiy": ("kiy", "N/A", "current stiffness"),
-    "bias-current": ("bias_current", "A", "bias current of the magnet pair"),
-    "amp-bandwidth": ("amp_bandwidth", "Hz", "amplifier current-loop bandwidth, or 'none'"),
-    "eddy-bandwidth": ("eddy_bandwidth", "Hz", "eddy-current force lag corner, or 'none'"),
-    "sensor-bandwidth": ("sensor_bandwidth", "Hz", "displacement sensor bandwidth, or 'none'"),
-    "sensor-noise": ("sensor_noise", "m rms", "displacement sensor noise"),
-    "force-noise": ("force_noise", "N rms", "force transducer noise"),
-    "mass-loading": ("mass_loading", "kg", "extra mass moving with the platform"),
-    "force-coupling-tau": ("force_coupling_tau", "s", "AC-coupling time constant of the force transducer, or 'none'"),
-    "dead-time": ("dead_time", "s", "transport delay from the current command to the amplifier (DSP latency)"),
+RIG_OPTIONS = {  # option (the Rig field with "_" for "-") -> (unit, help)
+    "mass": ("kg", "known moving mass m of eq. 9"),
+    "kyy": ("N/m", "position stiffness of the magnet pair (negative)"),
+    "kiy": ("N/A", "current stiffness"),
+    "bias-current": ("A", "bias current of the magnet pair"),
+    "amp-bandwidth": ("Hz", "amplifier current-loop bandwidth, or 'none'"),
+    "eddy-bandwidth": ("Hz", "eddy-current force lag corner, or 'none'"),
+    "sensor-bandwidth": ("Hz", "displacement sensor bandwidth, or 'none'"),
+    "sensor-noise": ("m rms", "displacement sensor noise"),
+    "force-noise": ("N rms", "force transducer noise"),
+    "mass-loading": ("kg", "extra mass moving with the platform"),
+    "force-coupling-tau": ("s", "AC-coupling time constant of the force transducer, or 'none'"),
+    "dead-time": ("s", "transport delay from the current command to the amplifier (DSP latency)"),
 }
-PID_OPTIONS = {
-    "kp": ("kp", "A/m", "proportional gain"),
-    "ki": ("ki", "A/(m s)", "integral gain"),
-    "kd": ("kd", "A s/m", "derivative gain"),
-    "derivative-cutoff": ("derivative_cutoff", "Hz", "derivative filter corner, or 'none'"),
-    "fs": ("fs", "Hz", "sampling frequency"),
+PID_OPTIONS = {  # option (the PID field with "_" for "-") -> (unit, help)
+    "kp": ("A/m", "proportional gain"),
+    "ki": ("A/(m s)", "integral gain"),
+    "kd": ("A s/m", "derivative gain"),
+    "derivative-cutoff": ("Hz", "derivative filter corner, or 'none'"),
+    "fs": ("Hz", "sampling frequency"),
 }
+GAINS = ("kp", "ki", "kd")
 
 
 class UsageError(Exception):
@@ -48,7 +49,10 @@ class UsageError(Exception):
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse with its errors in the command's one-line form (exit status 2)."""
+    """argparse with its errors in the command's one-line form (exit status 2), and no abbreviated options."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **{"allow_abbrev": False, **kwargs})
 
     def error(self, message: str) -> NoReturn:
         print(f"amb-fast: error: {message} (see {self.prog} --help)", file=sys.stderr)
@@ -61,13 +65,16 @@ FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 SWEEP_SUFFIXES = (".nc", ".npz", ".csv")
 
 
+def _existing_parent(path: Path) -> Path:
+    return path.parent if str(path.parent) else Path(".")
+
+
 def check_output(path: Path, option: str, suffixes: Sequence[str], overwrite: bool) -> Path:
     """Refuse an output path before any work: its suffix, its directory, an existing file (without --overwrite)."""
     if path.suffix.lower() not in suffixes:
         raise UsageError(f"{option} must end in {', '.join(suffixes)}, got {str(path)!r}")
-    directory = path.parent if str(path.parent) else Path(".")
-    if not directory.is_dir():
-        raise UsageError(f"{option}: the directory {str(directory)!r} does not exist")
+    if not _existing_parent(path).is_dir():
+        raise UsageError(f"{option}: the directory {str(_existing_parent(path))!r} does not exist")
     if path.is_dir():
         raise UsageError(f"{option}: {str(path)!r} is a directory")
     if path.exists() and not overwrite:
@@ -79,14 +86,24 @@ def check_output_dir(directory: Path, option: str, names: Sequence[str], overwri
     """An output folder: it may not exist yet (its parent must); files in it are not overwritten without --overwrite."""
     if directory.exists() and not directory.is_dir():
         raise UsageError(f"{option}: {str(directory)!r} exists and is not a directory")
-    parent = directory.parent if str(directory.parent) else Path(".")
-    if not parent.is_dir():
-        raise UsageError(f"{option}: the directory {str(parent)!r} does not exist")
+    if not _existing_parent(directory).is_dir():
+        raise UsageError(f"{option}: the directory {str(_existing_parent(directory))!r} does not exist")
     existing = [name for name in names if (directory / name).exists()]
     if existing and not overwrite:
         shown = ", ".join(existing[:4]) + (" ..." if len(existing) > 4 else "")
         raise UsageError(f"{option}: {str(directory)!r} already holds {shown}; pass --overwrite to replace them")
     return directory
+
+
+def check_save_and_figure(args: argparse.Namespace, save_suffixes: Sequence[str]) -> None:
+    """``--save`` and ``--figure`` (when given): their paths, and the extras that write them."""
+    if args.save is not None:
+        check_output(args.save, "--save", save_suffixes, args.overwrite)
+        if args.save.suffix.lower() == ".nc":
+            _needs("h5netcdf", "xarray", "--save .nc")
+    if args.figure is not None:
+        check_output(args.figure, "--figure", FIGURE_SUFFIXES, args.overwrite)
+        _needs("matplotlib", "plot", "--figure")
 
 
 def _needs(module: str, extra: str, what: str) -> None:
@@ -143,13 +160,13 @@ def _add_model_options(parser: argparse.ArgumentParser, gains: bool = True) -> N
     rig = parser.add_argument_group("rig (defaults: Rig.paper())")
     rig.add_argument("--rig", type=Path, metavar="FILE", help="rig file (TOML or JSON, as `fit --out` writes) "
                      "replacing Rig.paper(); the rig options below change its values")  # fmt: skip
-    for option, (_, unit, text) in RIG_OPTIONS.items():
+    for option, (unit, text) in RIG_OPTIONS.items():
         rig.add_argument(f"--{option}", type=_number_or_none, default=argparse.SUPPRESS, metavar="X",
                          help=f"{text} ({unit})")  # fmt: skip
     rig.add_argument("--force-law", choices=["linear", "nonlinear"], default=argparse.SUPPRESS, help="magnet force law")
     pid = parser.add_argument_group("controller (defaults: PID.paper())")
-    for option, (_, unit, text) in PID_OPTIONS.items():
-        if gains or option not in ("kp", "ki", "kd"):
+    for option, (unit, text) in PID_OPTIONS.items():
+        if gains or option not in GAINS:
             pid.add_argument(f"--{option}", type=_number_or_none, default=argparse.SUPPRESS, metavar="X",
                              help=f"{text} ({unit})")  # fmt: skip
     pid.add_argument("--delay", type=int, default=argparse.SUPPRESS, help="computation delay (whole samples)")
@@ -170,14 +187,12 @@ def _add_model_options(parser: argparse.ArgumentParser, gains: bool = True) -> N
 def _model(args: argparse.Namespace, *, gains: bool = True) -> tuple[Rig, AnyController]:
     """The paper's rig and controller with the options that were given (the others are absent); the
     controller of ``--controller FILE`` instead of the PID when given."""
-    rig_changes = {field: getattr(args, o.replace("-", "_")) for o, (field, _, _) in RIG_OPTIONS.items()
-                   if hasattr(args, o.replace("-", "_"))}  # fmt: skip
-    if hasattr(args, "force_law"):
-        rig_changes["force_law"] = args.force_law
-    pid_changes = {field: getattr(args, o.replace("-", "_")) for o, (field, _, _) in PID_OPTIONS.items()
-                   if hasattr(args, o.replace("-", "_")) and (gains or field not in ("kp", "ki", "kd"))}  # fmt: skip
-    if hasattr(args, "delay"):
-        pid_changes["delay"] = args.delay
+
+    def present(names: list[str]) -> dict[str, Any]:
+        return {name: getattr(args, name) for name in names if hasattr(args, name)}
+
+    rig_changes = present([*_attributes(RIG_OPTIONS), "force_law"])
+    pid_changes = present([n for n in [*_attributes(PID_OPTIONS), "delay"] if gains or n not in GAINS])
     base = Rig.paper() if getattr(args, "rig", None) is None else load_rig(args.rig)
     rig = replace(base, **rig_changes)
     if getattr(args, "controller", None) is None:
@@ -188,6 +203,11 @@ def _model(args: argparse.Namespace, *, gains: bool = True) -> tuple[Rig, AnyCon
     if not args.controller.is_file():
         raise UsageError(f"--controller: {str(args.controller)!r} is not a file")
     return rig, load_controller(args.controller)
+
+
+def _attributes(options: Iterable[str]) -> list[str]:
+    """The attribute (and Rig or PID field) names of options: ``bias-current`` -> ``bias_current``."""
+    return [option.replace("-", "_") for option in options]
 
 
 DEFAULT_F_MAX = 200.0  # Hz: the paper's band
@@ -212,11 +232,15 @@ def default_at(freq: np.ndarray) -> np.ndarray:
     return np.unique(freq[[int(np.argmin(np.abs(freq - f))) for f in wanted]])
 
 
-def check_at(at: np.ndarray, freq: np.ndarray) -> None:
-    """Refuse ``--at`` values the user gave outside the excited band."""
+def at_lines(at: np.ndarray | None, freq: np.ndarray) -> np.ndarray:
+    """The lines of the table: ``--at`` refused outside the excited band ``freq`` (Hz), or by default
+    :func:`default_at`, which follows the band of the options given (--f-max 20, --lines odd, --fs 300)."""
+    if at is None:
+        return default_at(freq)
     outside = [float(f) for f in at if not freq[0] <= f <= freq[-1]]
     if outside:
         raise UsageError(f"--at must be within the excited band {freq[0]:g}-{freq[-1]:g} Hz, got {outside}")
+    return at
 
 
 def _excitation(args: argparse.Namespace, pid: AnyController):  # noqa: ANN202
@@ -226,17 +250,17 @@ def _excitation(args: argparse.Namespace, pid: AnyController):  # noqa: ANN202
 
 # -- the library's messages in the command's words -------------------------------------------------------------
 
+
+def _option_names(*options: str) -> dict[str, str]:
+    return dict(zip(_attributes(options), (f"--{option}" for option in options)))
+
+
 #: Python keyword argument -> the option that sets it, per command: the one place where the library's
 #: parameter names (``settle_periods``, ``fs``) become options (``--settle-periods``, ``--fs``) in messages.
-MODEL_OPTION_NAMES = {field: f"--{option}" for option, (field, _, _) in {**RIG_OPTIONS, **PID_OPTIONS}.items()} | {
-    "f0": "--f0", "f_max": "--f-max", "rms": "--rms", "periods": "--periods", "settle_periods": "--settle-periods",
-    "seed": "--seed", "delay": "--delay", "force_law": "--force-law", "workers": "--workers", "grid": "--grid",
-}  # fmt: skip
-IDENTIFY_OPTION_NAMES = {
-    "fs": "--fs", "f0": "--f0", "f_max": "--f-max", "mass": "--mass", "settle_periods": "--settle-periods",
-    "median_window": "--median-window", "clearance": "--clearance", "recording": "--recording", "time": "--time",
-    "lines": "--lines", "path": "FILE",
-}  # fmt: skip
+MODEL_OPTION_NAMES = _option_names(*RIG_OPTIONS, *PID_OPTIONS, "f0", "f-max", "rms", "periods", "settle-periods",
+                                   "seed", "delay", "force-law", "workers", "grid")  # fmt: skip
+IDENTIFY_OPTION_NAMES = _option_names("fs", "f0", "f-max", "mass", "settle-periods", "median-window", "clearance",
+                                      "recording", "time", "lines") | {"path": "FILE"}  # fmt: skip
 #: Names that also stand for the data ("force must be finite" is about the samples, "time must be increasing"
 #: about the column): only ``name=`` is taken for an option.
 _DATA = frozenset({"time", "force", "displacement", "path"})

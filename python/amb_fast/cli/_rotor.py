@@ -14,13 +14,11 @@ from .._excitation import schroeder_multisine
 from .._validate import integer
 from ..system import RotorRig, campbell, load_rotor, measure_sensitivity, run_experiment, unbalance_response
 from ._options import (
-    FIGURE_SUFFIXES,
     UsageError,
-    _needs,
     _save_figure,
     _started,
     _values,
-    check_output,
+    check_save_and_figure,
     default_f_max,
 )
 
@@ -28,7 +26,6 @@ from ._options import (
 def add_rotor_parser(subparsers: Any, parents: list[argparse.ArgumentParser]) -> None:
     rotor = subparsers.add_parser(
         "rotor",
-        allow_abbrev=False,
         parents=parents,
         help="a rotor on two bearings: experiment | campbell | sensitivity | unbalance",
     )
@@ -61,24 +58,20 @@ def _unbalance(text: str) -> list[tuple[float, float, float]]:
         me, z, phase = (float(v) for v in text.split(","))
     except ValueError:
         raise UsageError(f"--unbalance must be 'm_e,z,phase' (kg m, m, rad), got {text!r}") from None
+    if not np.all(np.isfinite([me, z, phase])):  # an input mistake (exit status 2), not a failed run
+        raise UsageError(f"--unbalance must be finite numbers 'm_e,z,phase' (kg m, m, rad), got {text!r}")
     return [(me, z, phase)]
 
 
 def cmd_rotor(args: argparse.Namespace) -> None:
     rig, pid = load_rotor(args.rotor) if args.rotor is not None else (RotorRig.example(), RotorRig.example_controller())
-    if args.figure is not None:
-        if args.step == "sensitivity":
-            raise UsageError("--figure goes with experiment, campbell and unbalance (sensitivity prints a table)")
-        _needs("matplotlib", "plot", "--figure")
-        check_output(args.figure, "--figure", FIGURE_SUFFIXES, args.overwrite)
+    if args.figure is not None and args.step == "sensitivity":
+        raise UsageError("--figure goes with experiment, campbell and unbalance (sensitivity prints a table)")
     for option, value in (("--exciter", args.exciter != "shaker"), ("--rms", args.rms is not None),
                           ("--save", args.save is not None)):  # fmt: skip
         if value and args.step != "experiment":
             raise UsageError(f"{option} goes with experiment, not {args.step}")
-    if args.save is not None:
-        if args.save.suffix.lower() == ".nc":
-            _needs("h5netcdf", "xarray", "--save .nc")
-        check_output(args.save, "--save", (".nc", ".npz", ".csv"), args.overwrite)
+    check_save_and_figure(args, (".nc", ".npz", ".csv"))
     if args.rms is not None and not (np.isfinite(args.rms) and args.rms > 0):
         raise UsageError(f"--rms must be a finite amplitude > 0 ({'A' if args.exciter == 'amb' else 'N'} rms), "
                          f"got {args.rms:g}")  # fmt: skip
@@ -89,6 +82,8 @@ def cmd_rotor(args: argparse.Namespace) -> None:
         raise UsageError(f"--speeds must be finite speeds in rad/s, got {args.speeds}")
     if args.step in ("sensitivity", "experiment"):  # options are mistakes before the run (exit 2), not failed runs
         integer("--periods", args.periods, 2)
+        if args.speeds is not None:  # at the first speed given
+            rig = rig.at_speed(float(args.speeds[0]))
     _started(args)
     meta = {"command": f"rotor {args.step}", "rotor": str(args.rotor or "RotorRig.example()")}
     if args.step == "experiment":
@@ -102,8 +97,6 @@ def cmd_rotor(args: argparse.Namespace) -> None:
 
 
 def _experiment(rig: RotorRig, pid: Any, args: argparse.Namespace, meta: dict) -> None:
-    if args.speeds is not None:
-        rig = rig.at_speed(float(args.speeds[0]))
     amb = args.exciter == "amb"
     unit = "A" if amb else "N"
     rms = args.rms if args.rms is not None else (1.0 if amb else 10.0)  # 10 N: a 10 kg rotor moves ~ 1 um
@@ -149,8 +142,6 @@ def _campbell(rig: RotorRig, pid: Any, speeds: np.ndarray, args: argparse.Namesp
 
 
 def _sensitivity(rig: RotorRig, pid: Any, args: argparse.Namespace) -> None:
-    if args.speeds is not None:
-        rig = rig.at_speed(float(args.speeds[0]))
     # 2-1000 Hz, or up to the highest line below the controller's fs/2 when that is lower (a default follows fs)
     sphs = schroeder_multisine(f0=2.0, f_max=default_f_max(2.0, pid.fs, 1000.0), rms=1e-6, fs=pid.fs)
     measured = measure_sensitivity(rig, pid, sphs, periods=args.periods, seed=args.seed)
