@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Callable
-from concurrent.futures import Executor
+from concurrent.futures import Executor, ThreadPoolExecutor
 from dataclasses import fields, replace
 from typing import Any, Literal
 
@@ -111,14 +111,12 @@ def _pid_gains_only(factory: Factory | None, controller: AnyController | None, n
 
 
 def _run_chunk(
-    rig: Rig | None, controller: AnyController | None, factory: Factory | None, excitation: Multisine,
-    values: dict[str, np.ndarray], seeds: np.ndarray, periods: int, settle_periods: int | None, window: int,
-    workers: int, start: str = "steady",
+    values: dict[str, np.ndarray], seeds: np.ndarray, workers: int, rig: Rig | None, controller: AnyController | None,
+    factory: Factory | None, excitation: Multisine, periods: int, settle_periods: int | None, window: int, start: str,
 ) -> dict[str, np.ndarray]:  # fmt: skip
-    """One unit of work, for a thread or any executor (picklable arguments, numpy results): each
-    point's rig and controller, the stability check (an unstable point is flagged, never simulated;
-    made here, or by the core's workers where the settling time needs no poles), the settling time,
-    then one batched core call for the stable points."""
+    """The one-axis sweep's chunk for :func:`run_points`: each point's rig and controller, the stability
+    check (an unstable point is flagged, never simulated; made here, or by the core's workers where the
+    settling time needs no poles), the settling time, then one batched core call for the stable points."""
     n = len(seeds)
     names = list(values)
     in_core: np.ndarray | None = None  # the points' loop matrices, where the core checks their stability
@@ -129,8 +127,7 @@ def _run_chunk(
         assert rig is not None and isinstance(controller, PID)
         gains = _gain_arrays(controller, values.get("kp"), values.get("ki"), values.get("kd"))
         rigs: list[Rig] = [rig] * n
-        controllers: list[AnyController] = [controller] * n  # what the settling rule reads: the same fs
-        distinct_controllers: list[AnyController] = [controller]
+        controllers: list[AnyController] = [controller] * n  # what the settling rule reads
         core_controllers = controller._core_controllers(gains)
         stacks = list(_closed_loop_stacks(rig, controller, gains))
         if len(stacks) == 1 and (settle_periods is not None or (start == "steady" and rig.force_law == "linear")):
@@ -145,32 +142,28 @@ def _run_chunk(
         radius = np.array([np.max(np.abs(loop_poles(r, c)), initial=0.0) for r, c in models])
         rigs, controllers = [r for r, _ in models], [c for _, c in models]
         core_controllers = [core_controller(c) for c in controllers]
-        distinct_controllers = list({id(c): c for c in controllers}.values())
-    fs = excitation.fs
-    for c in distinct_controllers:
-        require(c.fs == fs, "controller fs", c.fs, f"equal to the excitation's fs ({fs} Hz)")
+    for c in {id(c): c for c in controllers}.values():
+        require(c.fs == excitation.fs, "controller fs", c.fs, f"equal to the excitation's fs ({excitation.fs} Hz)")
     stable = radius < 1.0 if radius is not None else np.ones(n, dtype=bool)  # in the core: flagged there
     if in_core is not None and settle_periods is None:  # one linear rig from the steady start: none
         settle = np.zeros(n, dtype=np.int64)
     elif settle_periods is None:  # the rule of run_experiment, so every point reruns bit for bit
-        period = excitation.period_samples
         assert radius is not None
+        period = excitation.period_samples
         settle = np.array([automatic_settle(r, c, float(rad), period, start) if ok else 0
-                           for r, c, rad, ok in zip(rigs, controllers, radius, stable)])  # fmt: skip
+                           for r, c, rad, ok in zip(rigs, controllers, radius, stable)], dtype=np.int64)  # fmt: skip
     else:
-        settle = np.full(n, settle_periods)
+        settle = np.full(n, settle_periods, dtype=np.int64)
     plan, unexcited = _plan(excitation.harmonics, excitation.period_samples)
-    lines = len(excitation.harmonics)
     out: dict[str, np.ndarray] = {}
 
     def unstable_until_run() -> None:  # NaN rows and "unstable" wherever the core's rows do not land
-        for name in _CORE_FIELDS[:-2]:
-            out[name] = np.full((n, lines), np.nan)
+        lines = len(excitation.harmonics)
+        out.update({name: np.full((n, lines), np.nan) for name in _CORE_FIELDS[1:-2]})
         out["H"] = np.full((n, lines), np.nan + 0j)
         out["unexcited_displacement"] = np.full((n, len(unexcited)), np.nan)
         out["status"] = np.full(n, STATUS.index("unstable"), dtype=np.int32)
 
-    settle64 = settle.astype(np.int64)
     rows = np.flatnonzero(stable)
     if not rows.size:
         unstable_until_run()
@@ -186,7 +179,7 @@ def _run_chunk(
 
         def core_call(pick: slice):  # noqa: ANN202  # the points rows[pick]
             at = rows[pick]
-            return _core.run_sweep(excitation.samples, point_rigs[pick], point_controllers[pick], settle64[at],
+            return _core.run_sweep(excitation.samples, point_rigs[pick], point_controllers[pick], settle[at],
                                    seeds[at], periods, plan, window, workers, start == "steady",
                                    None if in_core is None else in_core[at])  # fmt: skip
 
@@ -203,8 +196,7 @@ def _run_chunk(
                     overflowed.append(int(rows[j]))
         taken = [(pick, core.take()) for pick, core in parts]  # numpy arrays that own the core's memory
         if rows.size == n and len(taken) == 1:  # every point in one call: its arrays are the results
-            for name in _CORE_FIELDS:
-                out[name] = taken[0][1][name]
+            out.update({name: taken[0][1][name] for name in _CORE_FIELDS})
         else:
             unstable_until_run()
             for pick, arrays in taken:
@@ -215,7 +207,7 @@ def _run_chunk(
             point_rig = rigs[j]  # no clearance to touch on the linear law: the state overflowed
             if point_rig.force_law == "linear" and point_rig.clearance is None:
                 out["status"][j] = STATUS_NAMES.index(OVERFLOW)
-    out["settle_periods"] = settle64
+    out["settle_periods"] = settle
     return out
 
 
@@ -233,6 +225,83 @@ def progress_bar(progress: bool | None, total: int):  # noqa: ANN202
     except ImportError as error:
         raise ImportError("progress=True needs tqdm: pip install 'amb_fast[progress]'") from error
     return tqdm(total=total, unit="point", desc="sweep")
+
+
+def sweep_options(periods: int, settle_periods: int | None, median_window: int, start: str) -> dict[str, Any]:
+    """A sweep's run options, checked as :func:`run_experiment` checks them."""
+    require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
+    settle = None if settle_periods is None else integer("settle_periods", settle_periods, 0)
+    periods = integer("periods", periods, 2)
+    return dict(periods=periods, settle_periods=settle, median_window=_window(median_window), start=start)
+
+
+def run_points(
+    run: Callable[..., dict[str, np.ndarray]], fixed: tuple, points: dict[str, np.ndarray], seeds: np.ndarray, *,
+    workers: int | None, executor: Executor | None, progress: bool | None, bytes_per_point: int,
+    chunk_size: int | None = None, here: bool = True,
+) -> dict[str, np.ndarray]:  # fmt: skip
+    """The one sweep driver: a grid's points in chunks, with a progress bar; the chunks' per-point arrays
+    in grid order. ``run(values, seeds, core_threads, *fixed)`` runs one chunk (a module-level function
+    of picklable arguments, so any executor takes it: threads, processes, dask).
+
+    Without an ``executor``, chunks of :func:`points_per_call` points run here one after another, each on
+    ``workers`` core threads (``here``), or chunks of one point on a pool of ``workers`` threads (not
+    ``here``). With one, equal chunks (a multiple of ``workers`` of them, up to eight each, of at least
+    32 points where there are enough), each with ``workers`` core threads (default one)."""
+    n = seeds.size
+    threads = integer("workers", workers if workers is not None else (os.cpu_count() or 1), 1)
+    require(executor is None or callable(getattr(executor, "submit", None)), "executor", executor,
+            "a concurrent.futures.Executor (with submit)")  # fmt: skip
+    require(progress in (None, True, False), "progress", progress, "True, False or None")
+    size = integer("chunk_size", chunk_size, 1) if chunk_size is not None else 0
+    bar = progress_bar(progress, n)
+    pool = ThreadPoolExecutor(threads) if executor is None and not here else None
+    if not size and pool is not None:
+        size = 1
+    elif not size and executor is None:
+        size = points_per_call(n, threads, bytes_per_point, bar is not None)
+    elif not size:
+        count = min(8 * threads, max(1, -(-n // 32)))
+        size = -(-n // (-(-count // threads) * threads))
+    chunks = [slice(i, min(i + size, n)) for i in range(0, n, size)]  # contiguous: views, not copies
+    results: dict[str, np.ndarray] = {}
+
+    def chunk(rows: slice, core_threads: int) -> tuple:  # the arguments of one chunk's run
+        return ({name: values[rows] for name, values in points.items()}, seeds[rows], core_threads, *fixed)
+
+    def collect(rows: slice, part: dict[str, np.ndarray]) -> None:
+        if rows.stop - rows.start == n:  # the one chunk: its arrays (made for it, not shared) are the results
+            results.update(part)
+        else:
+            for name, values in part.items():
+                if name not in results:
+                    results[name] = np.empty((n, *values.shape[1:]), dtype=values.dtype)
+                results[name][rows] = values
+        if bar is not None:
+            bar.update(rows.stop - rows.start)
+
+    # BLAS on one thread (points made one by one make thousands of small matrix operations); here, also
+    # OpenBLAS's idle workers stopped: after the user's own numpy work they spin for ~0.1 s on the cores
+    # the core's threads need (a 40-point sweep: 1.2x from one to two threads instead of 1.75x).
+    try:
+        with blas_parked() if executor is None else blas_on_one_thread():
+            if executor is None and pool is None:
+                # One chunk after another, each split across `threads` core threads (no Python threads to
+                # start, no GIL between the chunks' points); Ctrl-C reaches the core through this thread.
+                for rows in chunks:
+                    collect(rows, run(*chunk(rows, threads)))
+            else:
+                runner: Executor = executor or pool  # type: ignore[assignment]
+                core_threads = workers if workers is not None and pool is None else 1
+                futures = [runner.submit(run, *chunk(rows, core_threads)) for rows in chunks]
+                for rows, future in zip(chunks, futures):
+                    collect(rows, future.result())
+    finally:
+        if bar is not None:
+            bar.close()
+        if pool is not None:
+            pool.shutdown()
+    return results
 
 
 @axes_aware
@@ -336,7 +405,7 @@ def sweep(
     >>> notched.points["notch_freq"]
     array([500., 900.])
     """
-    require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
+    options = sweep_options(periods, settle_periods, median_window, start)
     factory: Factory | None = None
     base_controller: Any
     if callable(rig) and not isinstance(rig, Rig) and not is_controller(rig):
@@ -354,81 +423,22 @@ def sweep(
     axes_values, points = sweep_grid(axes, grid)
     if factory is None:
         _check_names(base_rig, base_controller, list(points))  # type: ignore[arg-type]
-    periods = integer("periods", periods, 2)
-    window = _window(median_window)
-    n = len(next(iter(points.values())))
-
-    if settle_periods is not None:
-        settle_periods = integer("settle_periods", settle_periods, 0)
     base_seed = seed_value(seed)
-    seeds = point_seeds(base_seed, n)
-    threads = integer("workers", workers if workers is not None else (os.cpu_count() or 1), 1)
-    require(executor is None or callable(getattr(executor, "submit", None)), "executor", executor,
-            "a concurrent.futures.Executor (with submit)")  # fmt: skip
-    require(progress in (None, True, False), "progress", progress, "True, False or None")
-    size = integer("chunk_size", chunk_size, 1) if chunk_size is not None else 0
-    bar = progress_bar(progress, n)
-    if not size and executor is None:
-        size = points_per_call(n, threads, 72 * excitation.harmonics.size, bar is not None)
-    elif not size:  # equal work per worker: a multiple of `threads` chunks, up to eight each, of at least 32 points
-        count = min(8 * threads, max(1, -(-n // 32)))
-        count = -(-count // threads) * threads
-        size = -(-n // count)
-    chunks = [slice(i, min(i + size, n)) for i in range(0, n, size)]  # contiguous: views, not copies
-    _, unexcited = _plan(excitation.harmonics, excitation.period_samples)
-    results: dict[str, np.ndarray] = {}
-
-    def chunk(rows: slice, core_threads: int) -> tuple:  # the arguments of one chunk's _run_chunk
-        return (base_rig, base_controller, factory, excitation, {name: values[rows] for name, values in points.items()},
-                seeds[rows], periods, settle_periods, window, core_threads, start)  # fmt: skip
-
-    def collect(rows: slice, part: dict[str, np.ndarray]) -> None:
-        if rows.stop - rows.start == n:  # the one chunk: its arrays (made for it, not shared) are the results
-            results.update(part)
-        else:
-            for name, values in part.items():
-                if name not in results:
-                    results[name] = np.empty((n, *values.shape[1:]), dtype=values.dtype)
-                results[name][rows] = values
-        if bar is not None:
-            bar.update(rows.stop - rows.start)
-
-    # BLAS on one thread (points made one by one make thousands of small matrix operations); here, also
-    # OpenBLAS's idle workers stopped: after the user's own numpy work they spin for ~0.1 s on the cores
-    # the core's threads need (a 40-point sweep: 1.2x from one to two threads instead of 1.75x).
-    try:
-        with blas_parked() if executor is None else blas_on_one_thread():
-            if executor is None:
-                # Here, one chunk after another, each split across `threads` core threads (no Python threads
-                # to start, no GIL between the chunks' points); Ctrl-C reaches the core through this thread.
-                for rows in chunks:
-                    collect(rows, _run_chunk(*chunk(rows, threads)))
-            else:  # each chunk on the executor's workers, with `workers` core threads (default one)
-                core_threads = workers if workers is not None else 1
-                futures = [executor.submit(_run_chunk, *chunk(rows, core_threads)) for rows in chunks]
-                for rows, future in zip(chunks, futures):
-                    collect(rows, future.result())
-    finally:
-        if bar is not None:
-            bar.close()
-    status = _STATUS_NAMES[results.pop("status")]
-    settle = results.pop("settle_periods")
-    if isinstance(base_controller, PID):
-        described: Any = base_controller.__dict__
-    else:
-        described = repr(factory if factory is not None else base_controller)
-
+    seeds = point_seeds(base_seed, len(next(iter(points.values()))))
+    fixed = (base_rig, base_controller, factory, excitation, *options.values())
+    results = run_points(_run_chunk, fixed, points, seeds, workers=workers, executor=executor, progress=progress,
+                         bytes_per_point=72 * excitation.harmonics.size, chunk_size=chunk_size)  # fmt: skip
+    described = base_controller.__dict__ if isinstance(base_controller, PID) else repr(factory or base_controller)
     return SweepResult(
         points=points,
         axes=axes_values,
         grid=grid,
         freq=excitation.freq,
-        status=status,
-        settle_periods=settle,
+        status=_STATUS_NAMES[results.pop("status")],
         seeds=seeds,
-        unexcited_freq=unexcited * excitation.f0,
-        periods=periods,
-        blocks=periods // max(1, periods // 32),
+        unexcited_freq=_plan(excitation.harmonics, excitation.period_samples)[1] * excitation.f0,
+        periods=options["periods"],
+        blocks=options["periods"] // max(1, options["periods"] // 32),
         meta={
             "rig": None if base_rig is None else base_rig.__dict__,
             "controller": described,
