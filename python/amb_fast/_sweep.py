@@ -155,60 +155,62 @@ def _run_chunk(
     else:
         settle = np.full(n, settle_periods, dtype=np.int64)
     plan, unexcited = _plan(excitation.harmonics, excitation.period_samples)
-    out: dict[str, np.ndarray] = {}
+    rows = np.flatnonzero(stable)
+    if rigs.count(rigs[0]) == n:  # one rig (a gain sweep): made for the core once
+        point_rigs = [rigs[0]._to_core()] * rows.size
+    else:
+        masses = {rigs[j].mass for j in rows}
+        require(len(masses) <= 1, "mass", sorted(masses), "the same at every point of a sweep (kg)")
+        core_rigs = {id(r): r._to_core() for r in {id(rigs[j]): rigs[j] for j in rows}.values()}  # once per rig
+        point_rigs = [core_rigs[id(rigs[j])] for j in rows]
+    point_controllers = core_controllers if rows.size == n else [core_controllers[j] for j in rows]
 
-    def unstable_until_run() -> None:  # NaN rows and "unstable" wherever the core's rows do not land
+    def core_call(pick: slice):  # noqa: ANN202  # the points rows[pick]
+        at = rows[pick]
+        return _core.run_sweep(excitation.samples, point_rigs[pick], point_controllers[pick], settle[at], seeds[at],
+                               periods, plan, window, workers, start == "steady",
+                               None if in_core is None else in_core[at])  # fmt: skip
+
+    # A point that diverged (e.g. under saturation) fails its call: the points run alone, that one flagged.
+    parts, failed = run_or_split(core_call, rows.size, (ValueError, OverflowError))
+    taken = [(rows[pick], core.take()) for pick, core in parts]  # numpy arrays that own the core's memory
+    out: dict[str, np.ndarray] = {"settle_periods": settle}
+    if rows.size == n and len(taken) == 1:  # every point in one call: its arrays are the results
+        out.update({name: taken[0][1][name] for name in _CORE_FIELDS})
+    else:  # NaN rows and "unstable" wherever the core's rows do not land
         lines = len(excitation.harmonics)
         out.update({name: np.full((n, lines), np.nan) for name in _CORE_FIELDS[1:-2]})
         out["H"] = np.full((n, lines), np.nan + 0j)
         out["unexcited_displacement"] = np.full((n, len(unexcited)), np.nan)
         out["status"] = np.full(n, STATUS.index("unstable"), dtype=np.int32)
-
-    rows = np.flatnonzero(stable)
-    if not rows.size:
-        unstable_until_run()
-    else:
-        if rigs.count(rigs[0]) == n:  # one rig (a gain sweep): made for the core once
-            point_rigs = [rigs[0]._to_core()] * rows.size
-        else:
-            masses = {rigs[j].mass for j in rows}
-            require(len(masses) == 1, "mass", sorted(masses), "the same at every point of a sweep (kg)")
-            core_rigs = {id(r): r._to_core() for r in {id(rigs[j]): rigs[j] for j in rows}.values()}  # once per rig
-            point_rigs = [core_rigs[id(rigs[j])] for j in rows]
-        point_controllers = core_controllers if rows.size == n else [core_controllers[j] for j in rows]
-
-        def core_call(pick: slice):  # noqa: ANN202  # the points rows[pick]
-            at = rows[pick]
-            return _core.run_sweep(excitation.samples, point_rigs[pick], point_controllers[pick], settle[at],
-                                   seeds[at], periods, plan, window, workers, start == "steady",
-                                   None if in_core is None else in_core[at])  # fmt: skip
-
-        everything = slice(0, rows.size)
-        overflowed: list[int] = []
-        try:
-            parts = [(everything, core_call(everything))]
-        except (ValueError, OverflowError):  # a point diverged (e.g. under saturation): find it, flag it
-            parts = []
-            for j in range(rows.size):
-                try:
-                    parts.append((slice(j, j + 1), core_call(slice(j, j + 1))))
-                except (ValueError, OverflowError):
-                    overflowed.append(int(rows[j]))
-        taken = [(pick, core.take()) for pick, core in parts]  # numpy arrays that own the core's memory
-        if rows.size == n and len(taken) == 1:  # every point in one call: its arrays are the results
-            out.update({name: taken[0][1][name] for name in _CORE_FIELDS})
-        else:
-            unstable_until_run()
-            for pick, arrays in taken:
-                for name in _CORE_FIELDS:
-                    out[name][rows[pick]] = arrays[name]
-            out["status"][overflowed] = STATUS_NAMES.index(OVERFLOW)
-        for j in rows[out["status"][rows] == STATUS.index("touchdown")]:
-            point_rig = rigs[j]  # no clearance to touch on the linear law: the state overflowed
-            if point_rig.force_law == "linear" and point_rig.clearance is None:
-                out["status"][j] = STATUS_NAMES.index(OVERFLOW)
-    out["settle_periods"] = settle
+        for at, arrays in taken:
+            for name in _CORE_FIELDS:
+                out[name][at] = arrays[name]
+        out["status"][rows[failed]] = STATUS_NAMES.index(OVERFLOW)
+    for j in rows[out["status"][rows] == STATUS.index("touchdown")]:
+        point_rig = rigs[j]  # no clearance to touch on the linear law: the state overflowed
+        if point_rig.force_law == "linear" and point_rig.clearance is None:
+            out["status"][j] = STATUS_NAMES.index(OVERFLOW)
     return out
+
+
+def run_or_split(
+    call: Callable[[slice], Any], count: int, errors: type[Exception] | tuple[type[Exception], ...]
+) -> tuple[list[tuple[slice, Any]], list[int]]:
+    """``call`` over all ``count`` points, or where it raises one of ``errors``, over each point alone: the
+    parts that ran, ``(points, result)``, and the points that raised alone."""
+    if not count:
+        return [], []
+    try:
+        return [(slice(0, count), call(slice(0, count)))], []
+    except errors:
+        parts, failed = [], []
+        for j in range(count):
+            try:
+                parts.append((slice(j, j + 1), call(slice(j, j + 1))))
+            except errors:
+                failed.append(j)
+        return parts, failed
 
 
 _STATUS_NAMES = np.array(STATUS_NAMES)

@@ -27,7 +27,7 @@ from .._errors import UnstableLoopError
 from .._excitation import Multisine
 from .._linear import checked_poles, eigenvalues
 from .._params import PID, Rig
-from .._sweep import point_seeds, run_points, sweep_grid, sweep_options
+from .._sweep import point_seeds, run_or_split, run_points, sweep_grid, sweep_options
 from .._sweep_result import OVERFLOW, read_sweep_file, register_sweep_kind, unit_of
 from .._validate import require, seed_value
 from ..io import RESULT_UNITS, pandas_module, write_netcdf
@@ -281,41 +281,37 @@ def _run_points(
     out: dict[str, np.ndarray] = {name: np.full(shape, np.nan) for name in _ESTIMATES[:-1]}
     out["receptance"] = np.full(shape, np.nan, dtype=complex)
     out["stable"] = np.zeros(seeds.size, dtype=bool)
-    if N == 2:
-        done = _core_sweep(models, excitation, seeds, workers, **options)
-    else:
-        done = _one_by_one(models, excitation, seeds, options)
-    for j, estimates in done:
+    for j, estimates in (_core_sweep if N == 2 else _one_by_one)(models, excitation, seeds, workers, **options):
         out["stable"][j] = True  # its poles are inside the unit circle
         for name, array in zip(_ESTIMATES, estimates or ()):
             out[name][j] = array
     return out
 
 
-def _one_by_one(
-    models: list[tuple[Any, ControllerMatrix]], excitation: Multisine, seeds: np.ndarray, options: dict[str, Any]
-) -> Iterator[tuple[int, tuple[np.ndarray, ...] | None]]:
-    """Each stable point's index and its :func:`run_experiment` estimates (None: its spectra overflowed)."""
+Models = list[tuple[Any, ControllerMatrix]]  # each point's rig and controller
+Points = Iterator[tuple[int, tuple[np.ndarray, ...] | None]]  # each stable point's index and estimates
+
+
+def _one_by_one(models: Models, excitation: Multisine, seeds: np.ndarray, workers: int, **options: Any) -> Points:
+    """Each stable point's :func:`run_experiment` (None: its spectra overflowed); one thread per point."""
     for j, model in enumerate(models):
         try:
             est = run_experiment(*model, excitation, seed=int(seeds[j]), **options)
         except UnstableLoopError:
             continue
         except OverflowError:
-            yield j, None
-            continue
-        yield j, (est.k, est.c, est.k_std, est.c_std, est.receptance)
+            est = None
+        yield j, None if est is None else (est.k, est.c, est.k_std, est.c_std, est.receptance)
 
 
 def _core_sweep(
-    models: list[tuple[Any, ControllerMatrix]], excitation: Multisine, seeds: np.ndarray, workers: int, *,
-    periods: int, settle_periods: int | None, start: str, median_window: int,
-) -> Iterator[tuple[int, tuple[np.ndarray, ...] | None]]:  # fmt: skip
-    """Two-axis points in one call of the core on ``workers`` threads: each stable point's index and its
-    (k, c, k_std, c_std, receptance) as :func:`run_experiment` makes them, bit for bit (an unstable point
-    is not run; None for a point whose spectra overflowed). The loops are assembled here, each once, in one call
-    of the core on ``workers`` threads (a call's points outnumber loop_model's cache); their poles come from
-    the core in a stack per loop size, the numbers with which run_experiment checks one."""
+    models: Models, excitation: Multisine, seeds: np.ndarray, workers: int, *, periods: int, settle_periods: int | None,
+    start: str, median_window: int,
+) -> Points:  # fmt: skip
+    """Two-axis points in one call of the core on ``workers`` threads, as :func:`run_experiment` makes
+    them, bit for bit (an unstable point is not run). The loops are assembled here, each once, in one
+    call of the core (a call's points outnumber loop_model's cache); their poles come from the core in a
+    stack per loop size, the numbers with which run_experiment checks one."""
     loops = loop_models(models, workers)
     poles: list[np.ndarray] = [np.empty(0)] * len(models)
     sizes: dict[int, list[int]] = {}
@@ -335,26 +331,18 @@ def _core_sweep(
         if settle is None:
             settle = 0 if start == "steady" else settle_for(system, spec.fs, p, excitation.period_samples)
         given.append((j, system, core_args(loop, system, outputs=2), settle, experiment_seeds(int(seed), 2)))
-    if not given:
-        return
     freq = excitation.harmonics * excitation.f0  # as run_experiment computes them, to the bit
 
-    def run(part: list) -> tuple[np.ndarray, ...]:
+    def run(pick: slice) -> tuple[np.ndarray, ...]:
+        part = given[pick]
         args: dict[str, Any] = {name: [g[2][name] for g in part] for name in part[0][2]}  # a list per matrix
         return _core.mimo_line_sweep(
             **args, period_forces=experiment_forces(excitation, 2), settle_periods=[g[3] for g in part],
             periods=periods, seeds=np.array([g[4] for g in part], dtype=np.uint64), steady_start=start == "steady",
             bins=excitation.harmonics, workers=workers)  # fmt: skip
 
-    try:
-        results = [(given, run(given))]
-    except OverflowError:  # a point within rounding of |z| = 1: run them one by one, and flag that one
-        results = []
-        for g in given:
-            try:
-                results.append(([g], run([g])))
-            except OverflowError:
-                yield g[0], None
-    for part, (H, receptance, var_re, var_im) in results:
-        for at, (j, system, *_) in enumerate(part):
+    parts, failed = run_or_split(run, len(given), OverflowError)  # overflow: a point within rounding of |z| = 1
+    yield from ((given[at][0], None) for at in failed)
+    for pick, (H, receptance, var_re, var_im) in parts:
+        for at, (j, system, *_) in enumerate(given[pick]):
             yield j, (*coefficients(H[at], var_re[at], var_im[at], freq, system.mechanics()), receptance[at])
