@@ -20,7 +20,7 @@ from ._experiment import _plan, _window, automatic_settle
 from ._linear import AnyController, _gain_arrays, core_controller, is_controller, loop_poles
 from ._linear_poles import _closed_loop_stacks, _radius_of_gains
 from ._params import PID, Rig
-from ._sweep_result import OVERFLOW, STATUS, STATUS_NAMES, SWEPT, SweepResult, unit_of
+from ._sweep_result import OVERFLOW, STATUS, STATUS_NAMES, SWEPT, SweepResult, sweep_grid
 from ._validate import integer, require, rig_and_controller, seed_value
 from .io._results import version
 
@@ -47,25 +47,6 @@ def points_per_call(count: int, threads: int, bytes_per_point: int, progress: bo
     32 points a thread."""
     size = min(count, max(32 * threads, CALL_BYTES // bytes_per_point))
     return min(size, max(32 * threads, -(-count // 20))) if progress else size
-
-
-def sweep_grid(values: dict[str, ArrayLike], grid: str) -> tuple[dict, dict]:
-    require(grid in ("product", "zip"), "grid", grid, "'product' or 'zip'")
-    axes = {}
-    for name, given in values.items():
-        array = np.atleast_1d(np.asarray(given, dtype=float))
-        require(array.ndim == 1 and array.size > 0, name, given, "a non-empty 1-D sequence")
-        require(bool(np.isfinite(array).all()), name, given, f"finite ({unit_of(name) or 'no unit'})")
-        axes[name] = array
-    require(bool(axes), "axes", None, "at least one swept parameter (e.g. kp=[...], amp_bandwidth=[...])")
-    if grid == "product" and len(axes) > 1:
-        mesh = np.meshgrid(*axes.values(), indexing="ij")
-        points = {name: m.ravel() for name, m in zip(axes, mesh)}
-    else:  # zip, or one axis: the points are the axes' values
-        sizes = {name: a.size for name, a in axes.items()}
-        require(len(set(sizes.values())) == 1, "lengths", sizes, "equal for grid='zip'")
-        points = {name: a.copy() for name, a in axes.items()}
-    return axes, points
 
 
 def controller_params(controller: AnyController) -> dict[str, float]:
@@ -104,12 +85,6 @@ def point_model(
     return rig, controller
 
 
-def _pid_gains_only(factory: Factory | None, controller: AnyController | None, names: list[str]) -> bool:
-    """Whether a sweep's points differ in a PID's gains alone: then their loops come from cached matrices
-    and their controllers from the gain arrays, without BLAS work per point."""
-    return factory is None and isinstance(controller, PID) and set(names) <= set(SWEPT)
-
-
 def _run_chunk(
     values: dict[str, np.ndarray], seeds: np.ndarray, workers: int, rig: Rig | None, controller: AnyController | None,
     factory: Factory | None, excitation: Multisine, periods: int, settle_periods: int | None, window: int, start: str,
@@ -121,10 +96,10 @@ def _run_chunk(
     names = list(values)
     in_core: np.ndarray | None = None  # the points' loop matrices, where the core checks their stability
     radius = None  # the points' spectral radii, where checked here
-    if _pid_gains_only(factory, controller, names):
+    if factory is None and isinstance(controller, PID) and set(names) <= set(SWEPT):
         # PID gains only: the closed loop is affine in them, so all loop matrices come from four cached
-        # ones, and the core's controllers are made from the gain arrays without a PID per point.
-        assert rig is not None and isinstance(controller, PID)
+        # ones, and the core's controllers are made from the gain arrays without a PID (or BLAS) per point.
+        assert rig is not None
         gains = _gain_arrays(controller, values.get("kp"), values.get("ki"), values.get("kd"))
         rigs: list[Rig] = [rig] * n
         controllers: list[AnyController] = [controller] * n  # what the settling rule reads
@@ -431,6 +406,8 @@ def sweep(
     results = run_points(_run_chunk, fixed, points, seeds, workers=workers, executor=executor, progress=progress,
                          bytes_per_point=72 * excitation.harmonics.size, chunk_size=chunk_size)  # fmt: skip
     described = base_controller.__dict__ if isinstance(base_controller, PID) else repr(factory or base_controller)
+    meta = {"rig": None if base_rig is None else base_rig.__dict__, "controller": described, "f0": excitation.f0,
+            "fs": excitation.fs, "seed": base_seed, "amb_fast_version": version()}  # fmt: skip
     return SweepResult(
         points=points,
         axes=axes_values,
@@ -441,13 +418,6 @@ def sweep(
         unexcited_freq=_plan(excitation.harmonics, excitation.period_samples)[1] * excitation.f0,
         periods=options["periods"],
         blocks=options["periods"] // max(1, options["periods"] // 32),
-        meta={
-            "rig": None if base_rig is None else base_rig.__dict__,
-            "controller": described,
-            "f0": excitation.f0,
-            "fs": excitation.fs,
-            "seed": base_seed,
-            "amb_fast_version": version(),
-        },  # fmt: skip
+        meta=meta,
         **results,
     )

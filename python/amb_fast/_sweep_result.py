@@ -10,7 +10,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ._equality import UNITS as FIELD_UNITS
 from ._equality import ArrayRecord
 from ._validate import require
 
@@ -29,6 +31,26 @@ def unit_of(name: str) -> str:
     if name in UNITS:
         return UNITS[name]
     return "Hz" if name.endswith("_freq") or name.endswith("_width") else ""
+
+
+def sweep_grid(values: dict[str, ArrayLike], grid: str) -> tuple[dict, dict]:
+    """The swept values, checked, and every point's: for ``grid="product"`` the axes crossed (C order)."""
+    require(grid in ("product", "zip"), "grid", grid, "'product' or 'zip'")
+    axes = {}
+    for name, given in values.items():
+        array = np.atleast_1d(np.asarray(given, dtype=float))
+        require(array.ndim == 1 and array.size > 0, name, given, "a non-empty 1-D sequence")
+        require(bool(np.isfinite(array).all()), name, given, f"finite ({unit_of(name) or 'no unit'})")
+        axes[name] = array
+    require(bool(axes), "axes", None, "at least one swept parameter (e.g. kp=[...], amp_bandwidth=[...])")
+    if grid == "product" and len(axes) > 1:
+        mesh = np.meshgrid(*axes.values(), indexing="ij")
+        points = {name: m.ravel() for name, m in zip(axes, mesh)}
+    else:  # zip, or one axis: the points are the axes' values
+        sizes = {name: a.size for name, a in axes.items()}
+        require(len(set(sizes.values())) == 1, "lengths", sizes, "equal for grid='zip'")
+        points = {name: a.copy() for name, a in axes.items()}
+    return axes, points
 
 
 # Labelled in Python: the core reports a linear-law point whose state overflowed as "touchdown" (it
@@ -152,19 +174,9 @@ class SweepResult(ArrayRecord):
         def var(values: np.ndarray, units: str, lines: str = "freq") -> tuple:
             return ([*dims, lines], values.reshape(*shape, values.shape[-1]), {"units": units})
 
-        data = {
-            "H": var(self.H, "N/m"),
-            "k": var(self.k, "N/m"),
-            "c": var(self.c, "N s/m"),
-            "k_smooth": var(self.k_smooth, "N/m"),
-            "c_smooth": var(self.c_smooth, "N s/m"),
-            "k_std": var(self.k_std, "N/m"),
-            "c_std": var(self.c_std, "N s/m"),
-            "unexcited_displacement": var(self.unexcited_displacement, "m", "unexcited_freq"),
-            "status": (dims, self.status.reshape(shape), {}),
-            "settle_periods": (dims, self.settle_periods.reshape(shape), {}),
-            "seeds": (dims, self.seeds.reshape(shape), {}),
-        }
+        data = {name: var(getattr(self, name), FIELD_UNITS[name]) for name in _ARRAYS[1:8]}  # H, k, ..., c_std
+        data["unexcited_displacement"] = var(self.unexcited_displacement, "m", "unexcited_freq")
+        data |= {name: (dims, getattr(self, name).reshape(shape), {}) for name in ("status", "settle_periods", "seeds")}
         attrs = {"grid": self.grid, "periods": self.periods, "blocks": self.blocks, "meta": json.dumps(self.meta),
                  "axes": json.dumps(list(self.axes))}  # fmt: skip
         return data, coords, attrs
@@ -312,22 +324,15 @@ def load_sweep(path: str | Path) -> Any:  # noqa: ANN401 - a SweepResult or a Sw
         points = {k[6:]: contents[k] for k in contents if k.startswith("point_")}
         axes = {k[5:]: contents[k] for k in contents if k.startswith("axis_")}
         return SweepResult(points=points, axes=axes, **arrays, **header)
-    ds = contents
-    grid = header["grid"]
+    ds, grid = contents, header["grid"]
     names = json.loads(header["axes"]) if "axes" in header else [n for n in SWEPT if n in ds.coords]
-    n_dims = len(names) if grid == "product" else 1
+    axes, points = sweep_grid({name: ds[name].values for name in names}, grid)
+    dims = len(names) if grid == "product" else 1
 
     def rows(name: str) -> np.ndarray:
         values = np.asarray(ds[name].values)
-        return values.reshape(ds.status.size, *values.shape[n_dims:])
+        return values.reshape(ds.status.size, *values.shape[dims:])
 
-    if grid == "product":
-        axes = {n: np.asarray(ds[n].values) for n in names}
-        mesh = np.meshgrid(*axes.values(), indexing="ij")
-        points = {n: m.ravel() for n, m in zip(names, mesh)}
-    else:
-        points = {n: np.asarray(ds[n].values) for n in names}
-        axes = dict(points)
     arrays = {name: rows(name) for name in _ARRAYS if name not in ("freq", "unexcited_freq", "H")}
     arrays["status"], arrays["seeds"] = arrays["status"].astype(str), arrays["seeds"].astype(np.uint64)
     return SweepResult(

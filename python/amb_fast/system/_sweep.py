@@ -27,19 +27,12 @@ from .._errors import UnstableLoopError
 from .._excitation import Multisine
 from .._linear import checked_poles, eigenvalues
 from .._params import PID, Rig
-from .._sweep import point_seeds, run_or_split, run_points, sweep_grid, sweep_options
-from .._sweep_result import OVERFLOW, read_sweep_file, register_sweep_kind, unit_of
+from .._sweep import point_seeds, run_or_split, run_points, sweep_options
+from .._sweep_result import OVERFLOW, read_sweep_file, register_sweep_kind, sweep_grid, unit_of
 from .._validate import require, seed_value
 from ..io import RESULT_UNITS, pandas_module, write_netcdf
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
-from ._experiment import (
-    coefficients,
-    core_args,
-    experiment_forces,
-    experiment_seeds,
-    run_experiment,
-    settle_for,
-)
+from ._experiment import coefficients, core_args, experiment_forces, experiment_seeds, run_experiment, settle_for
 from ._model import System, loop_models
 from ._results import _ROTOR_UNITS, _complex, _long, _write_npz, _xarray
 
@@ -242,6 +235,7 @@ def sweep(
     workers: int | None = None,
     executor: Executor | None = None,
     progress: bool | None = None,
+    chunk_size: int | None = None,
     **axes: ArrayLike,
 ) -> SweepResultN:
     """:func:`run_experiment` over a grid of points named by parameter paths, e.g. ``sweep(rig, pid, sphs,
@@ -250,22 +244,22 @@ def sweep(
     with ``seeds[i]``, so it reruns alone bit for bit.
 
     Points run on ``executor`` (any :class:`concurrent.futures.Executor`: threads, processes, a dask
-    cluster's ``client.get_executor()``) in equal chunks, or by default each a :func:`run_experiment` on
-    ``workers`` threads (one per core). Two axes run in calls of the compiled core: the points' loops are
-    made here and the core's threads claim the points in turn with the GIL released; without an executor
-    a call takes up to ~32 MB of estimates (about 500 points of 200 lines), so a large grid is never held
-    twice, and ~20 calls with a progress bar (``progress``: a tqdm bar; default when stderr is a terminal).
+    cluster's ``client.get_executor()``) in chunks of ``chunk_size`` points (default: as
+    :func:`amb_fast.sweep`), or by default each a :func:`run_experiment` on ``workers`` threads (one per
+    core). Two axes run in calls of the compiled core: the points' loops are made here and the core's
+    threads claim the points in turn with the GIL released; without an executor a call takes up to ~32 MB
+    of estimates (about 500 points of 200 lines), so a large grid is never held twice, and ~20 calls with a
+    progress bar (``progress``: a tqdm bar; default when stderr is a terminal).
     """
     require(callable(getattr(rig, "mechanics", None)), "rig", type(rig).__name__, "a rig of N axes (TwoAxisRig, ...)")
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
     options = sweep_options(periods, settle_periods, median_window, start)
-    require(bool(axes), "sweep axes", "none", "at least one path with its values (kxy=[...], kp=[...], ...)")
     _, points = sweep_grid(dict(axes), grid)
     seeds = point_seeds(seed_value(seed), next(iter(points.values())).size)
     names = rig.mechanics().names
     results = run_points(_run_points, (rig, controller, excitation, options), points, seeds, workers=workers,
                          executor=executor, progress=progress, bytes_per_point=320 * excitation.freq.size,
-                         here=len(names) == 2)  # fmt: skip
+                         chunk_size=chunk_size, here=len(names) == 2)  # fmt: skip
     return SweepResultN(points, excitation.freq, **results, seeds=seeds, axes=names)
 
 
