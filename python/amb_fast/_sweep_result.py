@@ -269,16 +269,13 @@ def read_sweep_file(path: str | Path) -> tuple[str | None, dict[str, Any], Any]:
     path = Path(path)
     require(path.is_file(), "path", str(path), "an existing file")
     suffix = path.suffix.lower()
-    if suffix == ".csv":
-        raise ValueError(
-            f"path must end in .nc or .npz, got {str(path)!r} (a sweep's .csv is for other tools: "
-            "it keeps no complex H or seeds; save .nc or .npz to load it back)"
-        )
+    note = " (a sweep's .csv is for other tools: it keeps no complex H or seeds; save .nc or .npz to load it back)"
+    expected = "a file name ending in .nc or .npz" + (note if suffix == ".csv" else "")
+    require(suffix in (".nc", ".npz"), "path", str(path), expected)
     if suffix == ".npz":
         f = read_npz(path)  # a damaged member fails its CRC-32 and is refused
         header = json.loads(str(f["header"]))
         return header.get("kind"), header, f
-    require(suffix == ".nc", "path", str(path), "a file name ending in .nc or .npz")
     ds = read_netcdf(path)  # refuses a file whose checksums do not match
     return ds.attrs.get("amb_fast_kind"), dict(ds.attrs), ds
 

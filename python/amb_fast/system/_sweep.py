@@ -146,18 +146,15 @@ class SweepResultN(ArrayRecord):
 
 def _from_file(header: dict[str, Any], contents: Any) -> SweepResultN:  # noqa: ANN401 - an npz or a Dataset
     """The sweep in a file's contents: an ``.npz`` (its JSON header) or an xarray Dataset (its attributes)."""
-    if "kind" in header:  # .npz
-        params = {name: contents[f"param_{i}"] for i, name in enumerate(header["params"])}
-        arrays = {name: contents[name] for name in ("freq", "stable", "seeds", *_ESTIMATES)}
-        axes = header["axes"]
-    else:
-        params = {name: np.asarray(contents[name].values) for name in json.loads(header["params"])}
-        arrays = {name: np.asarray(contents[name].values) for name in ("freq", "stable", "seeds", *_ESTIMATES[:-1])}
-        parts = (np.asarray(contents[f"receptance_{part}"].values) for part in ("real", "imag"))
-        arrays["receptance"] = _complex(*parts)
-        axes = json.loads(header["axes"])
+    npz = "kind" in header  # else a Dataset and its attributes, lists written as JSON
+    listed = {name: header[name] if npz else json.loads(header[name]) for name in ("params", "axes")}
+    get = contents.__getitem__ if npz else lambda name: np.asarray(contents[name].values)  # noqa: E731
+    params = {name: get(f"param_{i}" if npz else name) for i, name in enumerate(listed["params"])}
+    arrays = {name: get(name) for name in ("freq", "stable", "seeds", *_ESTIMATES[: None if npz else -1])}
+    if not npz:
+        arrays["receptance"] = _complex(get("receptance_real"), get("receptance_imag"))
     arrays["stable"], arrays["seeds"] = arrays["stable"].astype(bool), arrays["seeds"].astype(np.uint64)
-    return SweepResultN(params=params, axes=tuple(str(a) for a in axes), **arrays)
+    return SweepResultN(params=params, axes=tuple(str(a) for a in listed["axes"]), **arrays)
 
 
 register_sweep_kind(_KIND, _from_file)  # amb_fast.load_sweep reads these files too
