@@ -159,14 +159,12 @@ class SweepResult(ArrayRecord):
     def _dataset_parts(self) -> tuple[dict[str, tuple], dict[str, tuple], dict[str, Any]]:
         """The dataset's data variables and coordinates as ``name: (dims, values, attrs)``, and its
         attributes: the one description of it, for :meth:`to_xarray` and for the direct NetCDF writer."""
-        if self.grid == "product":
-            dims = list(self.axes)
-            coords: dict[str, tuple] = {
-                name: ([name], values, {"units": unit_of(name)}) for name, values in self.axes.items()
-            }
-        else:
-            dims = ["point"]
-            coords = {name: (["point"], values, {"units": unit_of(name)}) for name, values in self.points.items()}
+        product = self.grid == "product"  # a dimension per swept parameter, else the points along one
+        dims = list(self.axes) if product else ["point"]
+        labels = self.axes if product else self.points
+        coords = {
+            name: ([name] if product else dims, values, {"units": unit_of(name)}) for name, values in labels.items()
+        }
         coords["freq"] = (["freq"], self.freq, {"units": "Hz"})
         coords["unexcited_freq"] = (["unexcited_freq"], self.unexcited_freq, {"units": "Hz"})
         shape = self.shape
