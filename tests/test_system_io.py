@@ -218,3 +218,12 @@ def test_each_loader_refuses_the_others_files(rotor_estimate, rotor_sweep, tmp_p
             sweep.save(tmp_path / f"sweep{suffix}")
             with pytest.raises(ValueError, match=r"path must be a(n .npz| .nc) file written by Estimate"):
                 af.load_estimate(tmp_path / f"sweep{suffix}")
+
+
+@pytest.mark.parametrize("suffix", [".nc", ".npz"])
+def test_load_sweep_reads_sweeps_of_n_axes(suffix: str, rotor_sweep, tmp_path) -> None:
+    """Before: af.load_sweep refused a SweepResultN's file ("path must be a file written by SweepResult.save");
+    it now reads every sweep, as load_estimate reads every estimate."""
+    back = af.load_sweep(rotor_sweep.save(tmp_path / f"s{suffix}"))
+    assert isinstance(back, system.SweepResultN) and back == rotor_sweep
+    assert list(back.status) == ["ok", "unstable", "ok", "ok"]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Callable
-from concurrent.futures import Executor
+from concurrent.futures import Executor, ThreadPoolExecutor
 from dataclasses import fields, replace
 from typing import Any, Literal
 
@@ -20,7 +20,7 @@ from ._experiment import _plan, _window, automatic_settle
 from ._linear import AnyController, _gain_arrays, core_controller, is_controller, loop_poles
 from ._linear_poles import _closed_loop_stacks, _radius_of_gains
 from ._params import PID, Rig
-from ._sweep_result import OVERFLOW, STATUS, STATUS_NAMES, SWEPT, SweepResult, unit_of
+from ._sweep_result import OVERFLOW, STATUS, STATUS_NAMES, SWEPT, SweepResult, sweep_grid
 from ._validate import integer, require, rig_and_controller, seed_value
 from .io._results import version
 
@@ -47,25 +47,6 @@ def points_per_call(count: int, threads: int, bytes_per_point: int, progress: bo
     32 points a thread."""
     size = min(count, max(32 * threads, CALL_BYTES // bytes_per_point))
     return min(size, max(32 * threads, -(-count // 20))) if progress else size
-
-
-def sweep_grid(values: dict[str, ArrayLike], grid: str) -> tuple[dict, dict]:
-    require(grid in ("product", "zip"), "grid", grid, "'product' or 'zip'")
-    axes = {}
-    for name, given in values.items():
-        array = np.atleast_1d(np.asarray(given, dtype=float))
-        require(array.ndim == 1 and array.size > 0, name, given, "a non-empty 1-D sequence")
-        require(bool(np.isfinite(array).all()), name, given, f"finite ({unit_of(name) or 'no unit'})")
-        axes[name] = array
-    require(bool(axes), "axes", None, "at least one swept parameter (e.g. kp=[...], amp_bandwidth=[...])")
-    if grid == "product" and len(axes) > 1:
-        mesh = np.meshgrid(*axes.values(), indexing="ij")
-        points = {name: m.ravel() for name, m in zip(axes, mesh)}
-    else:  # zip, or one axis: the points are the axes' values
-        sizes = {name: a.size for name, a in axes.items()}
-        require(len(set(sizes.values())) == 1, "lengths", sizes, "equal for grid='zip'")
-        points = {name: a.copy() for name, a in axes.items()}
-    return axes, points
 
 
 def controller_params(controller: AnyController) -> dict[str, float]:
@@ -104,33 +85,24 @@ def point_model(
     return rig, controller
 
 
-def _pid_gains_only(factory: Factory | None, controller: AnyController | None, names: list[str]) -> bool:
-    """Whether a sweep's points differ in a PID's gains alone: then their loops come from cached matrices
-    and their controllers from the gain arrays, without BLAS work per point."""
-    return factory is None and isinstance(controller, PID) and set(names) <= set(SWEPT)
-
-
 def _run_chunk(
-    rig: Rig | None, controller: AnyController | None, factory: Factory | None, excitation: Multisine,
-    values: dict[str, np.ndarray], seeds: np.ndarray, periods: int, settle_periods: int | None, window: int,
-    workers: int, start: str = "steady",
+    values: dict[str, np.ndarray], seeds: np.ndarray, workers: int, rig: Rig | None, controller: AnyController | None,
+    factory: Factory | None, excitation: Multisine, periods: int, settle_periods: int | None, window: int, start: str,
 ) -> dict[str, np.ndarray]:  # fmt: skip
-    """One unit of work, for a thread or any executor (picklable arguments, numpy results): each
-    point's rig and controller, the stability check (an unstable point is flagged, never simulated;
-    made here, or by the core's workers where the settling time needs no poles), the settling time,
-    then one batched core call for the stable points."""
+    """The one-axis sweep's chunk for :func:`run_points`: each point's rig and controller, the stability
+    check (an unstable point is flagged, never simulated; made here, or by the core's workers where the
+    settling time needs no poles), the settling time, then one batched core call for the stable points."""
     n = len(seeds)
     names = list(values)
     in_core: np.ndarray | None = None  # the points' loop matrices, where the core checks their stability
     radius = None  # the points' spectral radii, where checked here
-    if _pid_gains_only(factory, controller, names):
+    if factory is None and isinstance(controller, PID) and set(names) <= set(SWEPT):
         # PID gains only: the closed loop is affine in them, so all loop matrices come from four cached
-        # ones, and the core's controllers are made from the gain arrays without a PID per point.
-        assert rig is not None and isinstance(controller, PID)
+        # ones, and the core's controllers are made from the gain arrays without a PID (or BLAS) per point.
+        assert rig is not None
         gains = _gain_arrays(controller, values.get("kp"), values.get("ki"), values.get("kd"))
         rigs: list[Rig] = [rig] * n
-        controllers: list[AnyController] = [controller] * n  # what the settling rule reads: the same fs
-        distinct_controllers: list[AnyController] = [controller]
+        controllers: list[AnyController] = [controller] * n  # what the settling rule reads
         core_controllers = controller._core_controllers(gains)
         stacks = list(_closed_loop_stacks(rig, controller, gains))
         if len(stacks) == 1 and (settle_periods is not None or (start == "steady" and rig.force_law == "linear")):
@@ -145,78 +117,75 @@ def _run_chunk(
         radius = np.array([np.max(np.abs(loop_poles(r, c)), initial=0.0) for r, c in models])
         rigs, controllers = [r for r, _ in models], [c for _, c in models]
         core_controllers = [core_controller(c) for c in controllers]
-        distinct_controllers = list({id(c): c for c in controllers}.values())
-    fs = excitation.fs
-    for c in distinct_controllers:
-        require(c.fs == fs, "controller fs", c.fs, f"equal to the excitation's fs ({fs} Hz)")
+    for c in {id(c): c for c in controllers}.values():
+        require(c.fs == excitation.fs, "controller fs", c.fs, f"equal to the excitation's fs ({excitation.fs} Hz)")
     stable = radius < 1.0 if radius is not None else np.ones(n, dtype=bool)  # in the core: flagged there
     if in_core is not None and settle_periods is None:  # one linear rig from the steady start: none
         settle = np.zeros(n, dtype=np.int64)
     elif settle_periods is None:  # the rule of run_experiment, so every point reruns bit for bit
-        period = excitation.period_samples
         assert radius is not None
+        period = excitation.period_samples
         settle = np.array([automatic_settle(r, c, float(rad), period, start) if ok else 0
-                           for r, c, rad, ok in zip(rigs, controllers, radius, stable)])  # fmt: skip
+                           for r, c, rad, ok in zip(rigs, controllers, radius, stable)], dtype=np.int64)  # fmt: skip
     else:
-        settle = np.full(n, settle_periods)
+        settle = np.full(n, settle_periods, dtype=np.int64)
     plan, unexcited = _plan(excitation.harmonics, excitation.period_samples)
-    lines = len(excitation.harmonics)
-    out: dict[str, np.ndarray] = {}
+    rows = np.flatnonzero(stable)
+    if rigs.count(rigs[0]) == n:  # one rig (a gain sweep): made for the core once
+        point_rigs = [rigs[0]._to_core()] * rows.size
+    else:
+        masses = {rigs[j].mass for j in rows}
+        require(len(masses) <= 1, "mass", sorted(masses), "the same at every point of a sweep (kg)")
+        core_rigs = {id(r): r._to_core() for r in {id(rigs[j]): rigs[j] for j in rows}.values()}  # once per rig
+        point_rigs = [core_rigs[id(rigs[j])] for j in rows]
+    point_controllers = core_controllers if rows.size == n else [core_controllers[j] for j in rows]
 
-    def unstable_until_run() -> None:  # NaN rows and "unstable" wherever the core's rows do not land
-        for name in _CORE_FIELDS[:-2]:
-            out[name] = np.full((n, lines), np.nan)
+    def core_call(pick: slice):  # noqa: ANN202  # the points rows[pick]
+        at = rows[pick]
+        return _core.run_sweep(excitation.samples, point_rigs[pick], point_controllers[pick], settle[at], seeds[at],
+                               periods, plan, window, workers, start == "steady",
+                               None if in_core is None else in_core[at])  # fmt: skip
+
+    # A point that diverged (e.g. under saturation) fails its call: the points run alone, that one flagged.
+    parts, failed = run_or_split(core_call, rows.size, (ValueError, OverflowError))
+    taken = [(rows[pick], core.take()) for pick, core in parts]  # numpy arrays that own the core's memory
+    out: dict[str, np.ndarray] = {"settle_periods": settle}
+    if rows.size == n and len(taken) == 1:  # every point in one call: its arrays are the results
+        out.update({name: taken[0][1][name] for name in _CORE_FIELDS})
+    else:  # NaN rows and "unstable" wherever the core's rows do not land
+        lines = len(excitation.harmonics)
+        out.update({name: np.full((n, lines), np.nan) for name in _CORE_FIELDS[1:-2]})
         out["H"] = np.full((n, lines), np.nan + 0j)
         out["unexcited_displacement"] = np.full((n, len(unexcited)), np.nan)
         out["status"] = np.full(n, STATUS.index("unstable"), dtype=np.int32)
-
-    settle64 = settle.astype(np.int64)
-    rows = np.flatnonzero(stable)
-    if not rows.size:
-        unstable_until_run()
-    else:
-        if rigs.count(rigs[0]) == n:  # one rig (a gain sweep): made for the core once
-            point_rigs = [rigs[0]._to_core()] * rows.size
-        else:
-            masses = {rigs[j].mass for j in rows}
-            require(len(masses) == 1, "mass", sorted(masses), "the same at every point of a sweep (kg)")
-            core_rigs = {id(r): r._to_core() for r in {id(rigs[j]): rigs[j] for j in rows}.values()}  # once per rig
-            point_rigs = [core_rigs[id(rigs[j])] for j in rows]
-        point_controllers = core_controllers if rows.size == n else [core_controllers[j] for j in rows]
-
-        def core_call(pick: slice):  # noqa: ANN202  # the points rows[pick]
-            at = rows[pick]
-            return _core.run_sweep(excitation.samples, point_rigs[pick], point_controllers[pick], settle64[at],
-                                   seeds[at], periods, plan, window, workers, start == "steady",
-                                   None if in_core is None else in_core[at])  # fmt: skip
-
-        everything = slice(0, rows.size)
-        overflowed: list[int] = []
-        try:
-            parts = [(everything, core_call(everything))]
-        except (ValueError, OverflowError):  # a point diverged (e.g. under saturation): find it, flag it
-            parts = []
-            for j in range(rows.size):
-                try:
-                    parts.append((slice(j, j + 1), core_call(slice(j, j + 1))))
-                except (ValueError, OverflowError):
-                    overflowed.append(int(rows[j]))
-        taken = [(pick, core.take()) for pick, core in parts]  # numpy arrays that own the core's memory
-        if rows.size == n and len(taken) == 1:  # every point in one call: its arrays are the results
+        for at, arrays in taken:
             for name in _CORE_FIELDS:
-                out[name] = taken[0][1][name]
-        else:
-            unstable_until_run()
-            for pick, arrays in taken:
-                for name in _CORE_FIELDS:
-                    out[name][rows[pick]] = arrays[name]
-            out["status"][overflowed] = STATUS_NAMES.index(OVERFLOW)
-        for j in rows[out["status"][rows] == STATUS.index("touchdown")]:
-            point_rig = rigs[j]  # no clearance to touch on the linear law: the state overflowed
-            if point_rig.force_law == "linear" and point_rig.clearance is None:
-                out["status"][j] = STATUS_NAMES.index(OVERFLOW)
-    out["settle_periods"] = settle64
+                out[name][at] = arrays[name]
+        out["status"][rows[failed]] = STATUS_NAMES.index(OVERFLOW)
+    for j in rows[out["status"][rows] == STATUS.index("touchdown")]:
+        point_rig = rigs[j]  # no clearance to touch on the linear law: the state overflowed
+        if point_rig.force_law == "linear" and point_rig.clearance is None:
+            out["status"][j] = STATUS_NAMES.index(OVERFLOW)
     return out
+
+
+def run_or_split(
+    call: Callable[[slice], Any], count: int, errors: type[Exception] | tuple[type[Exception], ...]
+) -> tuple[list[tuple[slice, Any]], list[int]]:
+    """``call`` over all ``count`` points, or where it raises one of ``errors``, over each point alone: the
+    parts that ran, ``(points, result)``, and the points that raised alone."""
+    if not count:
+        return [], []
+    try:
+        return [(slice(0, count), call(slice(0, count)))], []
+    except errors:
+        parts, failed = [], []
+        for j in range(count):
+            try:
+                parts.append((slice(j, j + 1), call(slice(j, j + 1))))
+            except errors:
+                failed.append(j)
+        return parts, failed
 
 
 _STATUS_NAMES = np.array(STATUS_NAMES)
@@ -233,6 +202,83 @@ def progress_bar(progress: bool | None, total: int):  # noqa: ANN202
     except ImportError as error:
         raise ImportError("progress=True needs tqdm: pip install 'amb_fast[progress]'") from error
     return tqdm(total=total, unit="point", desc="sweep")
+
+
+def sweep_options(periods: int, settle_periods: int | None, median_window: int, start: str) -> dict[str, Any]:
+    """A sweep's run options, checked as :func:`run_experiment` checks them."""
+    require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
+    settle = None if settle_periods is None else integer("settle_periods", settle_periods, 0)
+    periods = integer("periods", periods, 2)
+    return dict(periods=periods, settle_periods=settle, median_window=_window(median_window), start=start)
+
+
+def run_points(
+    run: Callable[..., dict[str, np.ndarray]], fixed: tuple, points: dict[str, np.ndarray], seeds: np.ndarray, *,
+    workers: int | None, executor: Executor | None, progress: bool | None, bytes_per_point: int,
+    chunk_size: int | None = None, here: bool = True,
+) -> dict[str, np.ndarray]:  # fmt: skip
+    """The one sweep driver: a grid's points in chunks, with a progress bar; the chunks' per-point arrays
+    in grid order. ``run(values, seeds, core_threads, *fixed)`` runs one chunk (a module-level function
+    of picklable arguments, so any executor takes it: threads, processes, dask).
+
+    Without an ``executor``, chunks of :func:`points_per_call` points run here one after another, each on
+    ``workers`` core threads (``here``), or chunks of one point on a pool of ``workers`` threads (not
+    ``here``). With one, equal chunks (a multiple of ``workers`` of them, up to eight each, of at least
+    32 points where there are enough), each with ``workers`` core threads (default one)."""
+    n = seeds.size
+    threads = integer("workers", workers if workers is not None else (os.cpu_count() or 1), 1)
+    require(executor is None or callable(getattr(executor, "submit", None)), "executor", executor,
+            "a concurrent.futures.Executor (with submit)")  # fmt: skip
+    require(progress in (None, True, False), "progress", progress, "True, False or None")
+    size = integer("chunk_size", chunk_size, 1) if chunk_size is not None else 0
+    bar = progress_bar(progress, n)
+    pool = ThreadPoolExecutor(threads) if executor is None and not here else None
+    if not size and pool is not None:
+        size = 1
+    elif not size and executor is None:
+        size = points_per_call(n, threads, bytes_per_point, bar is not None)
+    elif not size:
+        count = min(8 * threads, max(1, -(-n // 32)))
+        size = -(-n // (-(-count // threads) * threads))
+    chunks = [slice(i, min(i + size, n)) for i in range(0, n, size)]  # contiguous: views, not copies
+    results: dict[str, np.ndarray] = {}
+
+    def chunk(rows: slice, core_threads: int) -> tuple:  # the arguments of one chunk's run
+        return ({name: values[rows] for name, values in points.items()}, seeds[rows], core_threads, *fixed)
+
+    def collect(rows: slice, part: dict[str, np.ndarray]) -> None:
+        if rows.stop - rows.start == n:  # the one chunk: its arrays (made for it, not shared) are the results
+            results.update(part)
+        else:
+            for name, values in part.items():
+                if name not in results:
+                    results[name] = np.empty((n, *values.shape[1:]), dtype=values.dtype)
+                results[name][rows] = values
+        if bar is not None:
+            bar.update(rows.stop - rows.start)
+
+    # BLAS on one thread (points made one by one make thousands of small matrix operations); here, also
+    # OpenBLAS's idle workers stopped: after the user's own numpy work they spin for ~0.1 s on the cores
+    # the core's threads need (a 40-point sweep: 1.2x from one to two threads instead of 1.75x).
+    try:
+        with blas_parked() if executor is None else blas_on_one_thread():
+            if executor is None and pool is None:
+                # One chunk after another, each split across `threads` core threads (no Python threads to
+                # start, no GIL between the chunks' points); Ctrl-C reaches the core through this thread.
+                for rows in chunks:
+                    collect(rows, run(*chunk(rows, threads)))
+            else:
+                runner: Executor = executor or pool  # type: ignore[assignment]
+                core_threads = workers if workers is not None and pool is None else 1
+                futures = [runner.submit(run, *chunk(rows, core_threads)) for rows in chunks]
+                for rows, future in zip(chunks, futures):
+                    collect(rows, future.result())
+    finally:
+        if bar is not None:
+            bar.close()
+        if pool is not None:
+            pool.shutdown()
+    return results
 
 
 @axes_aware
@@ -336,7 +382,7 @@ def sweep(
     >>> notched.points["notch_freq"]
     array([500., 900.])
     """
-    require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
+    options = sweep_options(periods, settle_periods, median_window, start)
     factory: Factory | None = None
     base_controller: Any
     if callable(rig) and not isinstance(rig, Rig) and not is_controller(rig):
@@ -354,88 +400,24 @@ def sweep(
     axes_values, points = sweep_grid(axes, grid)
     if factory is None:
         _check_names(base_rig, base_controller, list(points))  # type: ignore[arg-type]
-    periods = integer("periods", periods, 2)
-    window = _window(median_window)
-    n = len(next(iter(points.values())))
-
-    if settle_periods is not None:
-        settle_periods = integer("settle_periods", settle_periods, 0)
     base_seed = seed_value(seed)
-    seeds = point_seeds(base_seed, n)
-    threads = integer("workers", workers if workers is not None else (os.cpu_count() or 1), 1)
-    require(executor is None or callable(getattr(executor, "submit", None)), "executor", executor,
-            "a concurrent.futures.Executor (with submit)")  # fmt: skip
-    require(progress in (None, True, False), "progress", progress, "True, False or None")
-    size = integer("chunk_size", chunk_size, 1) if chunk_size is not None else 0
-    bar = progress_bar(progress, n)
-    if not size and executor is None:
-        size = points_per_call(n, threads, 72 * excitation.harmonics.size, bar is not None)
-    elif not size:  # equal work per worker: a multiple of `threads` chunks, up to eight each, of at least 32 points
-        count = min(8 * threads, max(1, -(-n // 32)))
-        count = -(-count // threads) * threads
-        size = -(-n // count)
-    chunks = [slice(i, min(i + size, n)) for i in range(0, n, size)]  # contiguous: views, not copies
-    _, unexcited = _plan(excitation.harmonics, excitation.period_samples)
-    results: dict[str, np.ndarray] = {}
-
-    def chunk(rows: slice, core_threads: int) -> tuple:  # the arguments of one chunk's _run_chunk
-        return (base_rig, base_controller, factory, excitation, {name: values[rows] for name, values in points.items()},
-                seeds[rows], periods, settle_periods, window, core_threads, start)  # fmt: skip
-
-    def collect(rows: slice, part: dict[str, np.ndarray]) -> None:
-        if rows.stop - rows.start == n:  # the one chunk: its arrays (made for it, not shared) are the results
-            results.update(part)
-        else:
-            for name, values in part.items():
-                if name not in results:
-                    results[name] = np.empty((n, *values.shape[1:]), dtype=values.dtype)
-                results[name][rows] = values
-        if bar is not None:
-            bar.update(rows.stop - rows.start)
-
-    # BLAS on one thread (points made one by one make thousands of small matrix operations); here, also
-    # OpenBLAS's idle workers stopped: after the user's own numpy work they spin for ~0.1 s on the cores
-    # the core's threads need (a 40-point sweep: 1.2x from one to two threads instead of 1.75x).
-    try:
-        with blas_parked() if executor is None else blas_on_one_thread():
-            if executor is None:
-                # Here, one chunk after another, each split across `threads` core threads (no Python threads
-                # to start, no GIL between the chunks' points); Ctrl-C reaches the core through this thread.
-                for rows in chunks:
-                    collect(rows, _run_chunk(*chunk(rows, threads)))
-            else:  # each chunk on the executor's workers, with `workers` core threads (default one)
-                core_threads = workers if workers is not None else 1
-                futures = [executor.submit(_run_chunk, *chunk(rows, core_threads)) for rows in chunks]
-                for rows, future in zip(chunks, futures):
-                    collect(rows, future.result())
-    finally:
-        if bar is not None:
-            bar.close()
-    status = _STATUS_NAMES[results.pop("status")]
-    settle = results.pop("settle_periods")
-    if isinstance(base_controller, PID):
-        described: Any = base_controller.__dict__
-    else:
-        described = repr(factory if factory is not None else base_controller)
-
+    seeds = point_seeds(base_seed, len(next(iter(points.values()))))
+    fixed = (base_rig, base_controller, factory, excitation, *options.values())
+    results = run_points(_run_chunk, fixed, points, seeds, workers=workers, executor=executor, progress=progress,
+                         bytes_per_point=72 * excitation.harmonics.size, chunk_size=chunk_size)  # fmt: skip
+    described = base_controller.__dict__ if isinstance(base_controller, PID) else repr(factory or base_controller)
+    meta = {"rig": None if base_rig is None else base_rig.__dict__, "controller": described, "f0": excitation.f0,
+            "fs": excitation.fs, "seed": base_seed, "amb_fast_version": version()}  # fmt: skip
     return SweepResult(
         points=points,
         axes=axes_values,
         grid=grid,
         freq=excitation.freq,
-        status=status,
-        settle_periods=settle,
+        status=_STATUS_NAMES[results.pop("status")],
         seeds=seeds,
-        unexcited_freq=unexcited * excitation.f0,
-        periods=periods,
-        blocks=periods // max(1, periods // 32),
-        meta={
-            "rig": None if base_rig is None else base_rig.__dict__,
-            "controller": described,
-            "f0": excitation.f0,
-            "fs": excitation.fs,
-            "seed": base_seed,
-            "amb_fast_version": version(),
-        },  # fmt: skip
+        unexcited_freq=_plan(excitation.harmonics, excitation.period_samples)[1] * excitation.f0,
+        periods=options["periods"],
+        blocks=options["periods"] // max(1, options["periods"] // 32),
+        meta=meta,
         **results,
     )

@@ -4,12 +4,15 @@ NetCDF and npz) and :func:`load_sweep`. Running sweeps is ``amb_fast._sweep``.""
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ._equality import UNITS as FIELD_UNITS
 from ._equality import ArrayRecord
 from ._validate import require
 
@@ -28,6 +31,26 @@ def unit_of(name: str) -> str:
     if name in UNITS:
         return UNITS[name]
     return "Hz" if name.endswith("_freq") or name.endswith("_width") else ""
+
+
+def sweep_grid(values: dict[str, ArrayLike], grid: str) -> tuple[dict, dict]:
+    """The swept values, checked, and every point's: for ``grid="product"`` the axes crossed (C order)."""
+    require(grid in ("product", "zip"), "grid", grid, "'product' or 'zip'")
+    axes = {}
+    for name, given in values.items():
+        array = np.atleast_1d(np.asarray(given, dtype=float))
+        require(array.ndim == 1 and array.size > 0, name, given, "a non-empty 1-D sequence")
+        require(bool(np.isfinite(array).all()), name, given, f"finite ({unit_of(name) or 'no unit'})")
+        axes[name] = array
+    require(bool(axes), "axes", None, "at least one swept parameter (e.g. kp=[...], amp_bandwidth=[...])")
+    if grid == "product" and len(axes) > 1:
+        mesh = np.meshgrid(*axes.values(), indexing="ij")
+        points = {name: m.ravel() for name, m in zip(axes, mesh)}
+    else:  # zip, or one axis: the points are the axes' values
+        sizes = {name: a.size for name, a in axes.items()}
+        require(len(set(sizes.values())) == 1, "lengths", sizes, "equal for grid='zip'")
+        points = {name: a.copy() for name, a in axes.items()}
+    return axes, points
 
 
 # Labelled in Python: the core reports a linear-law point whose state overflowed as "touchdown" (it
@@ -136,14 +159,12 @@ class SweepResult(ArrayRecord):
     def _dataset_parts(self) -> tuple[dict[str, tuple], dict[str, tuple], dict[str, Any]]:
         """The dataset's data variables and coordinates as ``name: (dims, values, attrs)``, and its
         attributes: the one description of it, for :meth:`to_xarray` and for the direct NetCDF writer."""
-        if self.grid == "product":
-            dims = list(self.axes)
-            coords: dict[str, tuple] = {
-                name: ([name], values, {"units": unit_of(name)}) for name, values in self.axes.items()
-            }
-        else:
-            dims = ["point"]
-            coords = {name: (["point"], values, {"units": unit_of(name)}) for name, values in self.points.items()}
+        product = self.grid == "product"  # a dimension per swept parameter, else the points along one
+        dims = list(self.axes) if product else ["point"]
+        labels = self.axes if product else self.points
+        coords = {
+            name: ([name] if product else dims, values, {"units": unit_of(name)}) for name, values in labels.items()
+        }
         coords["freq"] = (["freq"], self.freq, {"units": "Hz"})
         coords["unexcited_freq"] = (["unexcited_freq"], self.unexcited_freq, {"units": "Hz"})
         shape = self.shape
@@ -151,19 +172,9 @@ class SweepResult(ArrayRecord):
         def var(values: np.ndarray, units: str, lines: str = "freq") -> tuple:
             return ([*dims, lines], values.reshape(*shape, values.shape[-1]), {"units": units})
 
-        data = {
-            "H": var(self.H, "N/m"),
-            "k": var(self.k, "N/m"),
-            "c": var(self.c, "N s/m"),
-            "k_smooth": var(self.k_smooth, "N/m"),
-            "c_smooth": var(self.c_smooth, "N s/m"),
-            "k_std": var(self.k_std, "N/m"),
-            "c_std": var(self.c_std, "N s/m"),
-            "unexcited_displacement": var(self.unexcited_displacement, "m", "unexcited_freq"),
-            "status": (dims, self.status.reshape(shape), {}),
-            "settle_periods": (dims, self.settle_periods.reshape(shape), {}),
-            "seeds": (dims, self.seeds.reshape(shape), {}),
-        }
+        data = {name: var(getattr(self, name), FIELD_UNITS[name]) for name in _ARRAYS[1:8]}  # H, k, ..., c_std
+        data["unexcited_displacement"] = var(self.unexcited_displacement, "m", "unexcited_freq")
+        data |= {name: (dims, getattr(self, name).reshape(shape), {}) for name in ("status", "settle_periods", "seeds")}
         attrs = {"grid": self.grid, "periods": self.periods, "blocks": self.blocks, "meta": json.dumps(self.meta),
                  "axes": json.dumps(list(self.axes))}  # fmt: skip
         return data, coords, attrs
@@ -235,25 +246,54 @@ _ARRAYS = ("freq", "H", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std", "sta
 
 
 # What load_sweep says of another amb_fast file given to it.
-_NOT_A_SWEEP = (
-    "a file written by SweepResult.save (estimates load with load_estimate, sweeps of N axes with SweepResultN.load)"
-)
+_NOT_A_SWEEP = "a file written by SweepResult.save or SweepResultN.save (estimates load with load_estimate)"
+
+#: Readers of the other kinds of sweep file (an .npz header's ``kind``, a .nc file's ``amb_fast_kind``):
+#: ``reader(header, contents)``, registered by the layer that defines them (this one imports none).
+_READERS: dict[str, Callable[[dict[str, Any], Any], Any]] = {}
 
 
-def load_sweep(path: str | Path) -> SweepResult:
-    """Read a sweep written by :meth:`SweepResult.save` (``.nc`` or ``.npz``).
+def register_sweep_kind(kind: str, reader: Callable[[dict[str, Any], Any], Any]) -> None:
+    """Let :func:`load_sweep` read the files of another kind of sweep."""
+    _READERS[kind] = reader
+
+
+def read_sweep_file(path: str | Path) -> tuple[str | None, dict[str, Any], Any]:
+    """A sweep file's kind (None for a :class:`SweepResult`), header (an ``.npz``'s JSON header, a ``.nc``
+    file's attributes) and contents (the npz or the xarray Dataset), its checksums checked."""
+    from .io import read_netcdf
+    from .io._results import read_npz
+
+    path = Path(path)
+    require(path.is_file(), "path", str(path), "an existing file")
+    suffix = path.suffix.lower()
+    note = " (a sweep's .csv is for other tools: it keeps no complex H or seeds; save .nc or .npz to load it back)"
+    expected = "a file name ending in .nc or .npz" + (note if suffix == ".csv" else "")
+    require(suffix in (".nc", ".npz"), "path", str(path), expected)
+    if suffix == ".npz":
+        f = read_npz(path)  # a damaged member fails its CRC-32 and is refused
+        header = json.loads(str(f["header"]))
+        return header.get("kind"), header, f
+    ds = read_netcdf(path)  # refuses a file whose checksums do not match
+    return ds.attrs.get("amb_fast_kind"), dict(ds.attrs), ds
+
+
+def load_sweep(path: str | Path) -> Any:  # noqa: ANN401 - a SweepResult or a SweepResultN
+    """Read a sweep written by :meth:`SweepResult.save` or :meth:`SweepResultN.save` (``.nc`` or ``.npz``).
 
     Parameters
     ----------
     path : str or path-like
-        A ``.nc`` (NetCDF: needs the ``xarray`` extra) or ``.npz`` file written by :meth:`SweepResult.save`.
+        A ``.nc`` (NetCDF: needs the ``xarray`` extra) or ``.npz`` file written by :meth:`SweepResult.save`
+        or by :meth:`SweepResultN.save` (a sweep of N axes).
 
     Returns
     -------
     SweepResult
         The sweep as saved: gains in their units (A/m, A/(m s), A s/m, Hz), ``freq`` in Hz, ``k`` N/m,
-        ``c`` N s/m, statuses and seeds. A file whose checksums do not match (fletcher32 and SHA-256 in
-        NetCDF, CRC-32 in ``.npz``) is refused with a ``ValueError``, and so is another suffix.
+        ``c`` N s/m, statuses and seeds (a :class:`SweepResultN` for a sweep of N axes). A file whose
+        checksums do not match (fletcher32 and SHA-256 in NetCDF, CRC-32 in ``.npz``) is refused with a
+        ``ValueError``, and so is another suffix.
 
     See Also
     --------
@@ -270,63 +310,35 @@ def load_sweep(path: str | Path) -> SweepResult:
     >>> bool(np.array_equal(back.k, result.k)), back.points["kd"]
     (True, array([2., 3.]))
     """
-    path = Path(path)
-    require(path.is_file(), "path", str(path), "an existing file")
-    from .io import read_netcdf
-    from .io._results import read_npz
-
-    if path.suffix == ".npz":
-        f = read_npz(path)  # a damaged member fails its CRC-32 and is refused
-        header = json.loads(str(f["header"]))
-        require("grid" in header, "path", str(path), _NOT_A_SWEEP)
-        arrays = {name: f[name] for name in _ARRAYS}
-        points = {k[6:]: f[k] for k in f if k.startswith("point_")}
-        axes = {k[5:]: f[k] for k in f if k.startswith("axis_")}
+    kind, header, contents = read_sweep_file(path)
+    if kind in _READERS:
+        return _READERS[kind](header, contents)
+    require("grid" in header, "path", str(path), _NOT_A_SWEEP)
+    if Path(path).suffix.lower() == ".npz":
+        arrays = {name: contents[name] for name in _ARRAYS}
+        points = {k[6:]: contents[k] for k in contents if k.startswith("point_")}
+        axes = {k[5:]: contents[k] for k in contents if k.startswith("axis_")}
         return SweepResult(points=points, axes=axes, **arrays, **header)
-    if path.suffix == ".csv":
-        raise ValueError(
-            f"path must end in .nc or .npz, got {str(path)!r} (a sweep's .csv is for other tools: "
-            "it keeps no complex H or seeds; save .nc or .npz to load it back)"
-        )
-    if path.suffix != ".nc":
-        raise ValueError(f"path must end in .nc or .npz, got {str(path)!r}")
-    ds = read_netcdf(path)  # refuses a file whose checksums do not match
-    require("grid" in ds.attrs, "path", str(path), _NOT_A_SWEEP)
-    grid = ds.attrs["grid"]
-    names = json.loads(ds.attrs["axes"]) if "axes" in ds.attrs else [n for n in SWEPT if n in ds.coords]
-    n_dims = len(names) if grid == "product" else 1
-
-    n_points = int(ds.status.size)
+    ds, grid = contents, header["grid"]
+    names = json.loads(header["axes"]) if "axes" in header else [n for n in SWEPT if n in ds.coords]
+    axes, points = sweep_grid({name: ds[name].values for name in names}, grid)
+    dims = len(names) if grid == "product" else 1
 
     def rows(name: str) -> np.ndarray:
         values = np.asarray(ds[name].values)
-        return values.reshape(n_points, *values.shape[n_dims:])
+        return values.reshape(ds.status.size, *values.shape[dims:])
 
-    if grid == "product":
-        axes = {n: np.asarray(ds[n].values) for n in names}
-        mesh = np.meshgrid(*axes.values(), indexing="ij")
-        points = {n: m.ravel() for n, m in zip(names, mesh)}
-    else:
-        points = {n: np.asarray(ds[n].values) for n in names}
-        axes = dict(points)
+    arrays = {name: rows(name) for name in _ARRAYS if name not in ("freq", "unexcited_freq", "H")}
+    arrays["status"], arrays["seeds"] = arrays["status"].astype(str), arrays["seeds"].astype(np.uint64)
     return SweepResult(
         points=points,
         axes=axes,
         grid=grid,
         freq=np.asarray(ds.freq.values),
         H=rows("H_real") + 1j * rows("H_imag"),
-        k=rows("k"),
-        c=rows("c"),
-        k_smooth=rows("k_smooth"),
-        c_smooth=rows("c_smooth"),
-        k_std=rows("k_std"),
-        c_std=rows("c_std"),
-        status=rows("status").astype(str),
-        settle_periods=rows("settle_periods"),
-        seeds=rows("seeds").astype(np.uint64),
         unexcited_freq=np.asarray(ds.unexcited_freq.values),
-        unexcited_displacement=rows("unexcited_displacement"),
-        periods=int(ds.attrs["periods"]),
-        blocks=int(ds.attrs["blocks"]),
-        meta=json.loads(ds.attrs["meta"]),
+        periods=int(header["periods"]),
+        blocks=int(header["blocks"]),
+        meta=json.loads(header["meta"]),
+        **arrays,
     )

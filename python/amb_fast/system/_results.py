@@ -1,5 +1,5 @@
-"""Results of N axes out and in: :class:`EstimateN` and :class:`SweepResultN` as xarray and pandas views and
-as checksummed files written atomically.
+"""Results of N axes out and in: :class:`EstimateN` as xarray and pandas views and as checksummed files
+written atomically (:class:`SweepResultN` uses the same pieces).
 
 An estimate's every array is (lines, N, N): the matrices over ``(freq, out, in)`` (``H[:, i, j] = dF_i /
 dY_j``), the period-averaged amplitudes over ``(freq, channel, experiment)``. Files: ``.nc`` (NetCDF written
@@ -17,7 +17,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._sweep_result import unit_of
 from .._validate import require
 from ..io import RESULT_UNITS as UNITS
 from ..io import (
@@ -25,17 +24,14 @@ from ..io import (
     atomic_text,
     digest,
     pandas_module,
-    read_netcdf,
     read_npz,
     register_estimate_kind,
     version,
     write_dataset_netcdf,
-    write_netcdf,
 )
 
 if TYPE_CHECKING:
     from ._experiment import EstimateN
-    from ._sweep import SweepResultN
 
 KIND = "EstimateN"  # the ``amb_fast_kind`` attribute (NetCDF) or the CSV's second line: an estimate of N axes
 CSV_HEAD = "# amb_fast estimate of N axes"
@@ -187,92 +183,6 @@ def load_estimate(path: Path) -> EstimateN:
     header = json.loads(str(f["header"]))
     require(header.get("kind") == KIND, "path", str(path), f"an .npz file written by {KIND}.save")
     return _build(f["freq"], {name: f[name] for name in MATRICES + AMPLITUDES}, header["periods"], header["axes"])
-
-
-# -- sweeps ---------------------------------------------------------------------------------------------------------
-
-_SWEEP = ("k", "c", "k_std", "c_std", "receptance")
-
-
-def _param_unit(path: str) -> str:
-    field = path.rpartition(".")[2]
-    return _ROTOR_UNITS.get(field, "") if path == "speed" or path.startswith("rotor.") else unit_of(field)
-
-
-def sweep_status(result: SweepResultN) -> np.ndarray:
-    """Per point: ``"ok"``; ``"unstable"`` (not run); ``"overflow"`` (stable, but its line spectra overflowed:
-    a pole within rounding of the unit circle, whose stationary state cannot be computed; rows NaN)."""
-    ran = np.isfinite(result.k).any(axis=tuple(range(1, result.k.ndim)))
-    return np.where(~result.stable, "unstable", np.where(ran, "ok", "overflow"))
-
-
-def sweep_to_xarray(result: SweepResultN):  # noqa: ANN201 - xarray is optional
-    """An ``xarray.Dataset`` over ``(point, freq, out, in)``; the swept paths are coordinates along ``point``
-    (with their units), and ``status``, ``stable``, ``seeds`` per point."""
-    names = np.array(result.axes)
-    data: dict[str, tuple] = {name: (("point", "freq", "out", "in"), getattr(result, name),
-                   {"units": UNITS[name]}) for name in _SWEEP}  # fmt: skip
-    data |= {"stable": (("point",), result.stable, {}), "seeds": (("point",), result.seeds, {}),
-             "status": (("point",), sweep_status(result), {})}  # fmt: skip
-    coords = {name: (("point",), values, {"units": _param_unit(name)}) for name, values in result.params.items()}
-    coords |= {"freq": (("freq",), result.freq, {"units": "Hz"}), "out": (("out",), names, {}),
-               "in": (("in",), names, {})}  # fmt: skip
-    attrs = {"amb_fast_kind": "SweepResultN", "params": json.dumps(list(result.params)),
-             "axes": json.dumps(list(result.axes))}  # fmt: skip
-    return _xarray().Dataset(data, coords=coords, attrs=attrs)
-
-
-def sweep_to_dataframe(result: SweepResultN):  # noqa: ANN201 - pandas is optional
-    """One row per point, line and matrix entry: the swept paths, ``status``, then as
-    :meth:`EstimateN.to_dataframe`."""
-    rows = result.freq.size * len(result.axes) ** 2
-    head = {name: np.repeat(values, rows) for name, values in result.params.items()}
-    head["status"] = np.repeat(sweep_status(result), rows)
-    return pandas_module().DataFrame(head | _long({n: getattr(result, n) for n in _SWEEP}, result.freq, result.axes))
-
-
-def save_sweep(result: SweepResultN, path: str | Path) -> Path:
-    """Write atomically to ``.nc`` (xarray's writer: fletcher32, SHA-256s) or ``.npz`` (CRC-32 per array)."""
-    path = Path(path)
-    suffix = path.suffix.lower()
-    require(suffix in (".nc", ".npz"), "path", str(path), "a file name ending in .nc or .npz")
-    if suffix == ".nc":
-        ds = sweep_to_xarray(result)
-        ds["receptance_real"], ds["receptance_imag"] = ds.receptance.real, ds.receptance.imag
-        for part in ("receptance_real", "receptance_imag"):
-            ds[part].attrs = dict(ds.receptance.attrs)
-        write_netcdf(ds.drop_vars("receptance"), path)
-    else:
-        arrays = {f"param_{i}": values for i, values in enumerate(result.params.values())}
-        arrays |= {name: getattr(result, name) for name in ("freq", "stable", "seeds", *_SWEEP)}
-        _write_npz(path, {"kind": "SweepResultN", "params": list(result.params), "axes": list(result.axes)}, arrays)
-    return path
-
-
-def load_sweep(path: str | Path) -> SweepResultN:
-    """Read a sweep of N axes written by :meth:`SweepResultN.save`; a damaged file is refused, naming it."""
-    from ._sweep import SweepResultN
-
-    path = Path(path)
-    require(path.is_file(), "path", str(path), "an existing file")
-    suffix = path.suffix.lower()
-    require(suffix in (".nc", ".npz"), "path", str(path), "a file name ending in .nc or .npz")
-    if suffix == ".npz":
-        f = read_npz(path)
-        header = json.loads(str(f["header"]))
-        require(header.get("kind") == "SweepResultN", "path", str(path), "an .npz file written by SweepResultN.save")
-        params = {name: f[f"param_{i}"] for i, name in enumerate(header["params"])}
-        arrays = {name: f[name] for name in ("freq", "stable", "seeds", *_SWEEP)}
-    else:
-        ds = read_netcdf(path)
-        require(ds.attrs.get("amb_fast_kind") == "SweepResultN", "path", str(path),
-                "a .nc file written by SweepResultN.save")  # fmt: skip
-        header = {"axes": json.loads(ds.attrs["axes"])}
-        params = {name: np.asarray(ds[name].values) for name in json.loads(ds.attrs["params"])}
-        arrays = {name: np.asarray(ds[name].values) for name in ("freq", "stable", "seeds", *_SWEEP[:-1])}
-        arrays["receptance"] = _complex(np.asarray(ds.receptance_real.values), np.asarray(ds.receptance_imag.values))
-    arrays["stable"], arrays["seeds"] = arrays["stable"].astype(bool), arrays["seeds"].astype(np.uint64)
-    return SweepResultN(params=params, axes=tuple(str(a) for a in header["axes"]), **arrays)
 
 
 # amb_fast.load_estimate (the io layer) reads these files through what this module registers.

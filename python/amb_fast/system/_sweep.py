@@ -10,39 +10,36 @@ off-diagonal one.
 
 from __future__ import annotations
 
-import os
+import json
 from collections.abc import Iterator
-from concurrent.futures import Executor, ThreadPoolExecutor
+from concurrent.futures import Executor
 from dataclasses import dataclass, fields, is_dataclass, replace
 from numbers import Real
+from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _core
-from .._blas import parked_blas
 from .._equality import ArrayRecord
 from .._errors import UnstableLoopError
 from .._excitation import Multisine
 from .._linear import checked_poles, eigenvalues
 from .._params import PID, Rig
-from .._sweep import point_seeds, points_per_call, progress_bar, sweep_grid
-from .._validate import integer, require, seed_value
-from . import _results
+from .._sweep import point_seeds, run_or_split, run_points, sweep_options
+from .._sweep_result import OVERFLOW, read_sweep_file, register_sweep_kind, sweep_grid, unit_of
+from .._validate import require, seed_value
+from ..io import RESULT_UNITS, pandas_module, write_netcdf
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
-from ._experiment import (
-    coefficients,
-    core_args,
-    experiment_forces,
-    experiment_seeds,
-    run_experiment,
-    settle_for,
-)
+from ._experiment import coefficients, core_args, experiment_forces, experiment_seeds, run_experiment, settle_for
 from ._model import System, loop_models
+from ._results import _ROTOR_UNITS, _complex, _long, _write_npz, _xarray
 
 _AXIS_FIELDS = tuple(f.name for f in fields(Rig) if f.name not in ("force_law", "substeps", "mass"))
 _GAINS = ("kp", "ki", "kd", "derivative_cutoff")
+_ESTIMATES = ("k", "c", "k_std", "c_std", "receptance")  # (points, lines, N, N) each
+_KIND = "SweepResultN"  # an .npz header's ``kind``, a .nc file's ``amb_fast_kind``
 
 
 @dataclass(frozen=True, eq=False)
@@ -91,11 +88,81 @@ class SweepResultN(ArrayRecord):
     seeds: np.ndarray
     axes: tuple[str, ...]
 
-    save = _results.save_sweep  # .nc or .npz, checksummed; SweepResultN.load reads it back
-    load = staticmethod(_results.load_sweep)
-    status = property(_results.sweep_status)
-    to_xarray = _results.sweep_to_xarray
-    to_dataframe = _results.sweep_to_dataframe
+    @property
+    def status(self) -> np.ndarray:
+        """Per point: ``"ok"``; ``"unstable"`` (not run); ``"overflow"`` (stable, but its line spectra
+        overflowed: a pole within rounding of the unit circle, whose stationary state cannot be computed;
+        rows NaN)."""
+        ran = np.isfinite(self.k).any(axis=tuple(range(1, self.k.ndim)))
+        return np.where(~self.stable, "unstable", np.where(ran, "ok", OVERFLOW))
+
+    def to_xarray(self):  # noqa: ANN201 - xarray is optional
+        """An ``xarray.Dataset`` over ``(point, freq, out, in)``; the swept paths are coordinates along
+        ``point`` (with their units), and ``status``, ``stable``, ``seeds`` per point."""
+        names = np.array(self.axes)
+        matrices = ("point", "freq", "out", "in")
+        data = {name: (matrices, getattr(self, name), {"units": RESULT_UNITS[name]}) for name in _ESTIMATES}
+        data |= {name: (("point",), getattr(self, name), {}) for name in ("stable", "seeds", "status")}
+        coords = {name: (("point",), values, {"units": _param_unit(name)}) for name, values in self.params.items()}
+        coords |= {"freq": (("freq",), self.freq, {"units": "Hz"}), "out": (("out",), names, {}),
+                   "in": (("in",), names, {})}  # fmt: skip
+        attrs = {"amb_fast_kind": _KIND, "params": json.dumps(list(self.params)), "axes": json.dumps(self.axes)}
+        return _xarray().Dataset(data, coords=coords, attrs=attrs)
+
+    def to_dataframe(self):  # noqa: ANN201 - pandas is optional
+        """One row per point, line and matrix entry: the swept paths, ``status``, then as
+        :meth:`EstimateN.to_dataframe`."""
+        rows = self.freq.size * len(self.axes) ** 2
+        head = {name: np.repeat(values, rows) for name, values in self.params.items()}
+        head["status"] = np.repeat(self.status, rows)
+        long = _long({name: getattr(self, name) for name in _ESTIMATES}, self.freq, self.axes)
+        return pandas_module().DataFrame(head | long)
+
+    def save(self, path: str | Path) -> Path:
+        """Write atomically to ``.nc`` (xarray's writer: fletcher32, SHA-256s) or ``.npz`` (CRC-32 per
+        array); :meth:`load` and :func:`amb_fast.load_sweep` read it back."""
+        path = Path(path)
+        require(path.suffix.lower() in (".nc", ".npz"), "path", str(path), "a file name ending in .nc or .npz")
+        if path.suffix.lower() == ".nc":
+            ds = self.to_xarray()
+            for part in ("real", "imag"):
+                ds[f"receptance_{part}"] = getattr(ds.receptance, part)
+                ds[f"receptance_{part}"].attrs = dict(ds.receptance.attrs)
+            write_netcdf(ds.drop_vars("receptance"), path)
+        else:
+            arrays = {f"param_{i}": values for i, values in enumerate(self.params.values())}
+            arrays |= {name: getattr(self, name) for name in ("freq", "stable", "seeds", *_ESTIMATES)}
+            _write_npz(path, {"kind": _KIND, "params": list(self.params), "axes": list(self.axes)}, arrays)
+        return path
+
+    @staticmethod
+    def load(path: str | Path) -> SweepResultN:
+        """Read a sweep of N axes written by :meth:`save`; a damaged file is refused, naming it."""
+        kind, header, contents = read_sweep_file(path)
+        npz = Path(path).suffix.lower() == ".npz"
+        require(kind == _KIND, "path", str(path), f"a{'n .npz' if npz else ' .nc'} file written by {_KIND}.save")
+        return _from_file(header, contents)
+
+
+def _from_file(header: dict[str, Any], contents: Any) -> SweepResultN:  # noqa: ANN401 - an npz or a Dataset
+    """The sweep in a file's contents: an ``.npz`` (its JSON header) or an xarray Dataset (its attributes)."""
+    npz = "kind" in header  # else a Dataset and its attributes, lists written as JSON
+    listed = {name: header[name] if npz else json.loads(header[name]) for name in ("params", "axes")}
+    get = contents.__getitem__ if npz else lambda name: np.asarray(contents[name].values)  # noqa: E731
+    params = {name: get(f"param_{i}" if npz else name) for i, name in enumerate(listed["params"])}
+    arrays = {name: get(name) for name in ("freq", "stable", "seeds", *_ESTIMATES[: None if npz else -1])}
+    if not npz:
+        arrays["receptance"] = _complex(get("receptance_real"), get("receptance_imag"))
+    arrays["stable"], arrays["seeds"] = arrays["stable"].astype(bool), arrays["seeds"].astype(np.uint64)
+    return SweepResultN(params=params, axes=tuple(str(a) for a in listed["axes"]), **arrays)
+
+
+register_sweep_kind(_KIND, _from_file)  # amb_fast.load_sweep reads these files too
+
+
+def _param_unit(path: str) -> str:
+    field = path.rpartition(".")[2]
+    return _ROTOR_UNITS.get(field, "") if path == "speed" or path.startswith("rotor.") else unit_of(field)
 
 
 def _with(part: Any, path: str, value: float, whole: str, expected: str) -> Any:
@@ -151,7 +218,6 @@ def point_model(rig: System, controller: ControllerSpec, values: dict[str, float
     return rig, ControllerMatrix(tuple(tuple(row) for row in entries), spec.fs)
 
 
-@parked_blas  # points on threads: BLAS on one thread, no idle OpenBLAS worker spinning
 def sweep(
     rig: System,
     controller: ControllerSpec,
@@ -166,6 +232,7 @@ def sweep(
     workers: int | None = None,
     executor: Executor | None = None,
     progress: bool | None = None,
+    chunk_size: int | None = None,
     **axes: ArrayLike,
 ) -> SweepResultN:
     """:func:`run_experiment` over a grid of points named by parameter paths, e.g. ``sweep(rig, pid, sphs,
@@ -174,90 +241,68 @@ def sweep(
     with ``seeds[i]``, so it reruns alone bit for bit.
 
     Points run on ``executor`` (any :class:`concurrent.futures.Executor`: threads, processes, a dask
-    cluster's ``client.get_executor()``), each a :func:`run_experiment`, by default on ``workers`` threads
-    (one per core). Two axes without an executor run in calls of the compiled core: the points' loops are
-    made here and the core's threads claim the points in turn with the GIL released; a call takes up to
-    ~32 MB of estimates (about 500 points of 200 lines), so a large grid is never held twice, and ~20
-    calls with a progress bar (``progress``: a tqdm bar; default when stderr is a terminal).
+    cluster's ``client.get_executor()``) in chunks of ``chunk_size`` points (default: as
+    :func:`amb_fast.sweep`), or by default each a :func:`run_experiment` on ``workers`` threads (one per
+    core). Two axes run in calls of the compiled core: the points' loops are made here and the core's
+    threads claim the points in turn with the GIL released; without an executor a call takes up to ~32 MB
+    of estimates (about 500 points of 200 lines), so a large grid is never held twice, and ~20 calls with a
+    progress bar (``progress``: a tqdm bar; default when stderr is a terminal).
     """
     require(callable(getattr(rig, "mechanics", None)), "rig", type(rig).__name__, "a rig of N axes (TwoAxisRig, ...)")
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
-    require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
-    require(progress in (None, True, False), "progress", progress, "True, False or None")
-    require(bool(axes), "sweep axes", "none", "at least one path with its values (kxy=[...], kp=[...], ...)")
-    periods = integer("periods", periods, 2)
-    window = integer("median_window", median_window, 1)
-    require(window % 2 == 1, "median_window", median_window, "odd")
-    if settle_periods is not None:
-        settle_periods = integer("settle_periods", settle_periods, 0)
-    threads = integer("workers", workers if workers is not None else (os.cpu_count() or 1), 1)
+    options = sweep_options(periods, settle_periods, median_window, start)
     _, points = sweep_grid(dict(axes), grid)
-    count = next(iter(points.values())).size
-    seeds = point_seeds(seed_value(seed), count)
+    seeds = point_seeds(seed_value(seed), next(iter(points.values())).size)
     names = rig.mechanics().names
-    N = len(names)
-    shape = (count, excitation.freq.size, N, N)
-    k, c, k_std, c_std = (np.full(shape, np.nan) for _ in range(4))
-    receptance = np.full(shape, np.nan, dtype=complex)
-    stable = np.zeros(count, dtype=bool)
-    options = dict(periods=periods, settle_periods=settle_periods, median_window=window, start=start)
+    results = run_points(_run_points, (rig, controller, excitation, options), points, seeds, workers=workers,
+                         executor=executor, progress=progress, bytes_per_point=320 * excitation.freq.size,
+                         chunk_size=chunk_size, here=len(names) == 2)  # fmt: skip
+    return SweepResultN(points, excitation.freq, **results, seeds=seeds, axes=names)
 
-    def model(i: int) -> tuple[Any, ControllerMatrix]:
-        return point_model(rig, controller, {n: float(v[i]) for n, v in points.items()})
 
-    def point(i: int) -> tuple[bool, tuple[np.ndarray, ...] | None]:
-        """Whether point i is stable, and its (k, c, k_std, c_std, receptance); None where it is unstable or
-        its spectra overflowed (a pole within rounding of |z| = 1: stable, its rows stay NaN)."""
+def _run_points(
+    values: dict[str, np.ndarray], seeds: np.ndarray, workers: int, rig: System, controller: ControllerSpec,
+    excitation: Multisine, options: dict[str, Any],
+) -> dict[str, np.ndarray]:  # fmt: skip
+    """The N-axis sweep's chunk for :func:`run_points`: per point its (lines, N, N) estimates (NaN where
+    unstable or where its spectra overflowed: a pole within rounding of |z| = 1) and whether it is stable."""
+    models = [point_model(rig, controller, {n: float(v[i]) for n, v in values.items()}) for i in range(seeds.size)]
+    N = len(rig.mechanics().names)
+    shape = (seeds.size, excitation.freq.size, N, N)
+    out: dict[str, np.ndarray] = {name: np.full(shape, np.nan) for name in _ESTIMATES[:-1]}
+    out["receptance"] = np.full(shape, np.nan, dtype=complex)
+    out["stable"] = np.zeros(seeds.size, dtype=bool)
+    for j, estimates in (_core_sweep if N == 2 else _one_by_one)(models, excitation, seeds, workers, **options):
+        out["stable"][j] = True  # its poles are inside the unit circle
+        for name, array in zip(_ESTIMATES, estimates or ()):
+            out[name][j] = array
+    return out
+
+
+Models = list[tuple[Any, ControllerMatrix]]  # each point's rig and controller
+Points = Iterator[tuple[int, tuple[np.ndarray, ...] | None]]  # each stable point's index and estimates
+
+
+def _one_by_one(models: Models, excitation: Multisine, seeds: np.ndarray, workers: int, **options: Any) -> Points:
+    """Each stable point's :func:`run_experiment` (None: its spectra overflowed); one thread per point."""
+    for j, model in enumerate(models):
         try:
-            est = run_experiment(*model(i), excitation, seed=int(seeds[i]), **options)  # type: ignore[arg-type]
+            est = run_experiment(*model, excitation, seed=int(seeds[j]), **options)
         except UnstableLoopError:
-            return False, None
+            continue
         except OverflowError:
-            return True, None
-        return True, (est.k, est.c, est.k_std, est.c_std, est.receptance)
-
-    def keep(i: int, values: tuple[np.ndarray, ...] | None) -> None:
-        stable[i] = True  # its poles are inside the unit circle; None: its spectra overflowed (rows stay NaN)
-        if values is not None:
-            k[i], c[i], k_std[i], c_std[i], receptance[i] = values
-
-    bar = progress_bar(progress, count)
-    try:
-        if executor is None and N == 2:  # the core's two-axis sweep: 4 x 80 bytes of estimates a line
-            size = points_per_call(count, threads, 320 * excitation.freq.size, bar is not None)
-            for first in range(0, count, size):
-                rows = np.arange(first, min(first + size, count))
-                models = [model(i) for i in rows]
-                for j, values in _core_sweep(models, excitation, settle_periods, seeds[rows], start, periods, threads):
-                    keep(rows[j], values)
-                if bar is not None:
-                    bar.update(rows.size)
-        else:
-            pool = ThreadPoolExecutor(threads) if executor is None else executor
-            try:
-                for i, (ok, values) in enumerate(pool.map(point, range(count))):
-                    if ok:
-                        keep(i, values)
-                    if bar is not None:
-                        bar.update(1)
-            finally:
-                if executor is None:
-                    pool.shutdown()
-    finally:
-        if bar is not None:
-            bar.close()
-    return SweepResultN(points, excitation.freq, k, c, k_std, c_std, receptance, stable, seeds, names)
+            est = None
+        yield j, None if est is None else (est.k, est.c, est.k_std, est.c_std, est.receptance)
 
 
 def _core_sweep(
-    models: list[tuple[Any, ControllerMatrix]], excitation: Multisine, settle_periods: int | None, seeds: np.ndarray,
-    start: str, periods: int, workers: int,
-) -> Iterator[tuple[int, tuple[np.ndarray, ...] | None]]:  # fmt: skip
-    """Two-axis points in one call of the core on ``workers`` threads: each stable point's index and its
-    (k, c, k_std, c_std, receptance) as :func:`run_experiment` makes them, bit for bit (an unstable point
-    is not run; None for a point whose spectra overflowed). The loops are assembled here, each once, in one call
-    of the core on ``workers`` threads (a call's points outnumber loop_model's cache); their poles come from
-    the core in a stack per loop size, the numbers with which run_experiment checks one."""
+    models: Models, excitation: Multisine, seeds: np.ndarray, workers: int, *, periods: int, settle_periods: int | None,
+    start: str, median_window: int,
+) -> Points:  # fmt: skip
+    """Two-axis points in one call of the core on ``workers`` threads, as :func:`run_experiment` makes
+    them, bit for bit (an unstable point is not run). The loops are assembled here, each once, in one
+    call of the core (a call's points outnumber loop_model's cache); their poles come from the core in a
+    stack per loop size, the numbers with which run_experiment checks one."""
     loops = loop_models(models, workers)
     poles: list[np.ndarray] = [np.empty(0)] * len(models)
     sizes: dict[int, list[int]] = {}
@@ -277,26 +322,18 @@ def _core_sweep(
         if settle is None:
             settle = 0 if start == "steady" else settle_for(system, spec.fs, p, excitation.period_samples)
         given.append((j, system, core_args(loop, system, outputs=2), settle, experiment_seeds(int(seed), 2)))
-    if not given:
-        return
     freq = excitation.harmonics * excitation.f0  # as run_experiment computes them, to the bit
 
-    def run(part: list) -> tuple[np.ndarray, ...]:
+    def run(pick: slice) -> tuple[np.ndarray, ...]:
+        part = given[pick]
         args: dict[str, Any] = {name: [g[2][name] for g in part] for name in part[0][2]}  # a list per matrix
         return _core.mimo_line_sweep(
             **args, period_forces=experiment_forces(excitation, 2), settle_periods=[g[3] for g in part],
             periods=periods, seeds=np.array([g[4] for g in part], dtype=np.uint64), steady_start=start == "steady",
             bins=excitation.harmonics, workers=workers)  # fmt: skip
 
-    try:
-        results = [(given, run(given))]
-    except OverflowError:  # a point within rounding of |z| = 1: run them one by one, and flag that one
-        results = []
-        for g in given:
-            try:
-                results.append(([g], run([g])))
-            except OverflowError:
-                yield g[0], None
-    for part, (H, receptance, var_re, var_im) in results:
-        for at, (j, system, *_) in enumerate(part):
+    parts, failed = run_or_split(run, len(given), OverflowError)  # overflow: a point within rounding of |z| = 1
+    yield from ((given[at][0], None) for at in failed)
+    for pick, (H, receptance, var_re, var_im) in parts:
+        for at, (j, system, *_) in enumerate(given[pick]):
             yield j, (*coefficients(H[at], var_re[at], var_im[at], freq, system.mechanics()), receptance[at])
