@@ -43,7 +43,26 @@ class UnexcitedLines(ArrayRecord):
 
 
 @dataclass(frozen=True, eq=False)
-class Estimate(ArrayRecord):
+class LineEstimate(ArrayRecord):
+    """What every estimate holds at its excited lines ``freq`` (Hz): per line a number for one axis
+    (:class:`Estimate`), an N x N matrix for N axes (:class:`~amb_fast.system.EstimateN`); their docstrings
+    give the units."""
+
+    freq: np.ndarray
+    H: np.ndarray
+    receptance: np.ndarray
+    k: np.ndarray
+    c: np.ndarray
+    k_smooth: np.ndarray
+    c_smooth: np.ndarray
+    k_std: np.ndarray
+    c_std: np.ndarray
+    force: np.ndarray
+    displacement: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class Estimate(LineEstimate):
     """Frequency-domain estimate at the excited lines (MODEL.md section 3).
 
     Two estimates are ``==`` when every field but ``meta`` is equal (arrays value by value, NaN equal to
@@ -89,17 +108,6 @@ class Estimate(ArrayRecord):
         fs, f0, mass, settle_periods. Saved with the estimate (:meth:`save`).
     """
 
-    freq: np.ndarray
-    H: np.ndarray
-    receptance: np.ndarray
-    k: np.ndarray
-    c: np.ndarray
-    k_smooth: np.ndarray
-    c_smooth: np.ndarray
-    k_std: np.ndarray
-    c_std: np.ndarray
-    force: np.ndarray
-    displacement: np.ndarray
     unexcited: UnexcitedLines
     periods: int
     blocks: int

@@ -23,14 +23,19 @@ from ._netcdf import read_netcdf, write_dataset_netcdf, write_netcdf
 from ._recording import Recording, load_recording, save_recording
 from ._results import UNITS as RESULT_UNITS
 from ._results import (
+    complex_array,
     digest,
     figure_metadata,
     load_estimate,
     pandas_module,
+    read_csv,
     read_npz,
     register_estimate_kind,
     save_estimate,
     version,
+    write_csv,
+    write_npz,
+    xarray_module,
 )
 from ._text import sniff
 
@@ -38,11 +43,16 @@ __all__ = [
     "CHANNEL_UNITS",
     "RESULT_UNITS",
     "Recording",
+    "complex_array",
     "digest",
     "figure_metadata",
     "pandas_module",
+    "read_csv",
     "read_npz",
     "register_estimate_kind",
+    "write_csv",
+    "write_npz",
+    "xarray_module",
     "version",
     "write_dataset_netcdf",
     "atomic_path",

@@ -12,13 +12,14 @@ import hashlib
 import json
 import zipfile
 import zlib
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._validate import require
-from ._atomic import atomic_text
+from ._atomic import atomic_path, atomic_text
 
 if TYPE_CHECKING:
     from .._experiment import Estimate
@@ -119,12 +120,8 @@ def estimate_dataset_parts(estimate: Estimate) -> tuple[dict[str, tuple], dict[s
 
 
 def estimate_to_xarray(estimate: Estimate):  # noqa: ANN201 - xarray is optional
-    try:
-        import xarray as xr
-    except ImportError as error:
-        raise ImportError("to_xarray needs xarray: pip install 'amb_fast[xarray]'") from error
     data, coords, attrs = estimate_dataset_parts(estimate)
-    return xr.Dataset(data, coords=coords, attrs=attrs)
+    return xarray_module().Dataset(data, coords=coords, attrs=attrs)
 
 
 def estimate_to_dataframe(estimate: Estimate):  # noqa: ANN201 - pandas is optional
@@ -158,6 +155,14 @@ def pandas_module():  # noqa: ANN202
     return pd
 
 
+def xarray_module():  # noqa: ANN202
+    try:
+        import xarray as xr
+    except ImportError as error:
+        raise ImportError("to_xarray needs xarray: pip install 'amb_fast[xarray]'") from error
+    return xr
+
+
 def _weak(estimate: Estimate) -> np.ndarray:
     return np.zeros(estimate.freq.size, bool) if estimate.weak is None else np.asarray(estimate.weak, bool)
 
@@ -186,15 +191,44 @@ def save_estimate(estimate: Estimate, path: str | Path) -> Path:
     suffix = path.suffix.lower()
     require(suffix in ESTIMATE_SUFFIXES, "path", str(path), "a file name ending in .csv or .nc")
     if suffix == ".csv":
-        lines = [f"# amb_fast estimate, version {version()}", "# meta: " + json.dumps(metadata(estimate)),
-                 ",".join(_COLUMNS)]  # fmt: skip
-        lines += [",".join(f"{v:.17g}" for v in row) for row in _table(estimate)]
-        body = "\n".join(lines) + "\n"
-        atomic_text(path, f"# sha256: {digest([body.encode()])}\n" + body)
-        return path
+        return write_csv(path, "# amb_fast estimate", metadata(estimate), _COLUMNS, _table(estimate))
     from ._netcdf import write_estimate_netcdf
 
     return write_estimate_netcdf(estimate, path)  # with h5netcdf alone: xarray's file, without importing xarray
+
+
+def write_csv(path: Path, head: str, meta: dict[str, Any], names: Sequence[str], table: np.ndarray) -> Path:
+    """A table written atomically as CSV: ``head`` and the version, ``# meta:`` and ``meta`` as JSON, the column
+    names, every value to 17 digits; a SHA-256 of all that in its first line (:func:`load_estimate` checks it)."""
+    lines = [f"{head}, version {version()}", "# meta: " + json.dumps(meta), ",".join(names)]
+    lines += [",".join(f"{v:.17g}" for v in row) for row in table]
+    body = "\n".join(lines) + "\n"
+    atomic_text(path, f"# sha256: {digest([body.encode()])}\n" + body)
+    return path
+
+
+def read_csv(text: str, columns: Sequence[str] | None = None) -> tuple[dict[str, Any], list[str], np.ndarray]:
+    """The metadata, the column names (these ``columns``, if given) and the table of a :func:`write_csv` file's
+    checked text."""
+    meta = json.loads(next(line for line in text.splitlines() if line.startswith("# meta: "))[8:])
+    rows = [line for line in text.splitlines() if line and not line.startswith("#")]
+    header = rows[0].split(",")
+    require(columns is None or header == list(columns), "header", rows[0][:60], "the columns of an amb_fast estimate")
+    table = np.array([[float(v) for v in line.split(",")] for line in rows[1:]], dtype=float)
+    return meta, header, table.reshape(-1, len(header))
+
+
+def write_npz(path: Path, header: dict[str, Any], arrays: dict[str, Any]) -> None:
+    """Arrays and a JSON ``header`` (with the amb_fast version) in a compressed ``.npz``, written atomically."""
+    with atomic_path(path) as target, open(target, "wb") as handle:
+        np.savez_compressed(handle, header=json.dumps(header | {"version": version()}), **arrays)
+
+
+def complex_array(real: np.ndarray, imag: np.ndarray) -> np.ndarray:
+    """``real + j imag`` bit for bit (``real + 1j * imag`` turns -0.0 into 0.0 and an infinite part into NaN)."""
+    out = np.empty(np.shape(real), dtype=complex)
+    out.real, out.imag = real, imag
+    return out
 
 
 def load_estimate(path: str | Path) -> Estimate | EstimateN:
@@ -222,16 +256,15 @@ def load_estimate(path: str | Path) -> Estimate | EstimateN:
         text = body.decode()
         if n_axes.csv_head and text.startswith(n_axes.csv_head):
             return n_axes.from_csv(text, path.name)
-        meta = json.loads(next(line for line in text.splitlines() if line.startswith("# meta: "))[8:])
-        table = _csv_rows(text)
+        meta, _, table = read_csv(text, _COLUMNS)
         col = {name: table[:, j] for j, name in enumerate(_COLUMNS)}
         excited = col["excited"] == 1.0
         pick = {name: values[excited] for name, values in col.items()}
         rest = {name: values[~excited] for name, values in col.items()}
         arrays = {
-            "freq": pick["freq_Hz"], "H": pick["H_real_N_per_m"] + 1j * pick["H_imag_N_per_m"],
-            "force": pick["force_real_N"] + 1j * pick["force_imag_N"],
-            "displacement": pick["displacement_real_m"] + 1j * pick["displacement_imag_m"],
+            "freq": pick["freq_Hz"], "H": complex_array(pick["H_real_N_per_m"], pick["H_imag_N_per_m"]),
+            "force": complex_array(pick["force_real_N"], pick["force_imag_N"]),
+            "displacement": complex_array(pick["displacement_real_m"], pick["displacement_imag_m"]),
             "weak": pick["weak"] == 1.0,
             **{n: pick[c] for n, c in zip(_REAL, _COLUMNS[5:11])},
         }  # fmt: skip
@@ -247,7 +280,7 @@ def load_estimate(path: str | Path) -> Estimate | EstimateN:
         meta = json.loads(ds.attrs["amb_fast"])
         arrays = {n: np.asarray(ds[n].values) for n in _REAL}
         for n in ("H", "force", "displacement"):
-            arrays[n] = np.asarray(ds[f"{n}_real"].values) + 1j * np.asarray(ds[f"{n}_imag"].values)
+            arrays[n] = complex_array(np.asarray(ds[f"{n}_real"].values), np.asarray(ds[f"{n}_imag"].values))
         arrays["freq"] = np.asarray(ds.freq.values)
         arrays["weak"] = np.asarray(ds.weak.values).astype(bool)
         unexcited = UnexcitedLines(np.asarray(ds.unexcited_freq.values), np.asarray(ds.unexcited_force.values),
@@ -255,12 +288,6 @@ def load_estimate(path: str | Path) -> Estimate | EstimateN:
     scalars = {k: meta.pop(k) for k in ("periods", "blocks", "saturated_samples")}
     meta.pop("amb_fast_version", None)
     return Estimate(receptance=1.0 / arrays["H"], unexcited=unexcited, meta=meta, **arrays, **scalars)
-
-
-def _csv_rows(text: str) -> np.ndarray:
-    rows = [line for line in text.splitlines() if line and not line.startswith("#")]
-    require(rows[0] == ",".join(_COLUMNS), "header", rows[0][:60], "the columns of an amb_fast estimate")
-    return np.array([[float(v) for v in line.split(",")] for line in rows[1:]], dtype=float).reshape(-1, len(_COLUMNS))
 
 
 # -- other writers' helpers -----------------------------------------------------------------------------------------

@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike
 from .. import _core
 from .._equality import ArrayRecord
 from .._excitation import Multisine
-from .._experiment import MAX_AUTOMATIC_SETTLE
+from .._experiment import MAX_AUTOMATIC_SETTLE, LineEstimate
 from .._linear import settle_periods_for
 from .._mechanics import Mechanics
 from .._ross import to_ross
@@ -117,7 +117,7 @@ def simulate(
 
 
 @dataclass(frozen=True, eq=False)
-class EstimateN(ArrayRecord):
+class EstimateN(LineEstimate):
     """N x N frequency-domain estimate at the excited lines; every matrix has shape (lines, N, N).
 
     Attributes
@@ -150,17 +150,6 @@ class EstimateN(ArrayRecord):
         time and the mass loading, as the model knows them; None from shakers.
     """
 
-    freq: np.ndarray
-    H: np.ndarray
-    receptance: np.ndarray
-    k: np.ndarray
-    c: np.ndarray
-    k_smooth: np.ndarray
-    c_smooth: np.ndarray
-    k_std: np.ndarray
-    c_std: np.ndarray
-    force: np.ndarray
-    displacement: np.ndarray
     periods: int
     axes: tuple[str, ...]
     process: np.ndarray | None = None
