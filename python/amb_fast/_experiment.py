@@ -19,6 +19,7 @@ from ._excitation import Multisine, period_samples
 from ._linear import AnyController, core_controller, require_stable, settle_periods_for, settling_radius
 from ._params import Rig
 from ._validate import integer, optional_positive, real, require, rig_and_controller, seed_value, series
+from .io import ONE_AXIS, estimate_fields_from_csv, estimate_fields_from_dataset, register_estimate_kind
 
 
 @dataclass(frozen=True, eq=False)
@@ -200,10 +201,14 @@ def _estimate(
     )
 
 
-def _window(median_window: int) -> int:
+def median_window_value(median_window: int) -> int:
+    """``median_window``, checked: a positive odd number of lines."""
     window = integer("median_window", median_window, 1)
     require(window % 2 == 1, "median_window", median_window, "odd")
     return window
+
+
+_window = median_window_value  # the one-axis sweep's name for it
 
 
 MAX_AUTOMATIC_SETTLE = 10_000
@@ -214,13 +219,19 @@ def automatic_settle(rig: Rig, controller: AnyController, radius: float, period:
     enough for the slowest pole to decay below 1e-9; more than 10^4 is refused, naming the pole."""
     if start == "steady" and rig.force_law == "linear":
         return 0
-    slowest = float(settling_radius(rig, controller, radius))
+    origin = "rest" if start == "rest" else "the linearised steady state"
+    return settle_from(float(settling_radius(rig, controller, radius)), period, origin)
+
+
+def settle_from(slowest: float, period: int, origin: str = "rest") -> int:
+    """Periods of ``period`` samples for a pole of radius ``slowest`` to decay below 1e-9 (settling from
+    ``origin``); more than 10^4 is refused, naming the pole."""
     periods = int(settle_periods_for(np.array(slowest), period))
     if periods > MAX_AUTOMATIC_SETTLE:
         raise ValueError(
-            f"settling from {'rest' if start == 'rest' else 'the linearised steady state'} would take {periods} "
-            f"periods (> {MAX_AUTOMATIC_SETTLE}): the slowest pole has |z| = {slowest:.12g}, a stability margin "
-            f"of 1 - |z| = {1 - slowest:.3g} per sample; use start='steady' (linear rigs) or give settle_periods"
+            f"settling from {origin} would take {periods} periods (> {MAX_AUTOMATIC_SETTLE}): the slowest pole has "
+            f"|z| = {slowest:.12g}, a stability margin of 1 - |z| = {1 - slowest:.3g} per sample; use "
+            "start='steady' (linear rigs) or give settle_periods"
         )
     return periods
 
@@ -273,7 +284,7 @@ def run_experiment(
     pid = controller
     require(excitation.fs == pid.fs, "excitation.fs", excitation.fs, f"equal to the controller's fs ({pid.fs} Hz)")
     periods = integer("periods", periods, 2)
-    window = _window(median_window)
+    window = median_window_value(median_window)
     period = excitation.period_samples
     require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
     poles = require_stable(rig, pid)
@@ -355,7 +366,7 @@ def identify(
     fs = real("fs", fs, "Hz", positive=True)
     f0 = real("f0", f0, "Hz", positive=True)
     mass = real("mass", mass, "kg", positive=True)
-    window = _window(median_window)
+    window = median_window_value(median_window)
     settle_periods = integer("settle_periods", settle_periods, 0)
     period = period_samples(fs, f0)
     start = settle_periods * period
@@ -459,3 +470,17 @@ def excited_lines(
             "pure-noise force, or pass lines= or f_max="
         )
     return found
+
+
+def _from_fields(fields: dict[str, Any]) -> Estimate:
+    return Estimate(**fields | {"unexcited": UnexcitedLines(*fields["unexcited"])})
+
+
+# amb_fast.load_estimate (the io layer) reads the one-axis files through this
+register_estimate_kind(
+    "# amb_fast estimate",
+    ONE_AXIS,
+    lambda text, name: _from_fields(estimate_fields_from_csv(text, name)),
+    lambda ds: _from_fields(estimate_fields_from_dataset(ds)),
+    None,
+)

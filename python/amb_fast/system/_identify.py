@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike
 from .. import _checks
 from .._errors import IdentificationWarning, NonPeriodicExcitationWarning
 from .._excitation import period_samples
-from .._experiment import excited_lines
+from .._experiment import excited_lines, median_window_value
 from .._mechanics import Mechanics
 from .._params import Rig
 from .._validate import integer, real, require
@@ -181,8 +181,7 @@ def identify(
         forces, displacements = list(F), list(Y)
     fs = real("fs", fs, "Hz", positive=True)
     f0 = real("f0", f0, "Hz", positive=True)
-    window = integer("median_window", median_window, 1)
-    require(window % 2 == 1, "median_window", median_window, "odd")
+    window = median_window_value(median_window)
     period = period_samples(fs, f0)
     start = integer("settle_periods", settle_periods, 0) * period
     n = min(x.shape[0] for x in forces)
