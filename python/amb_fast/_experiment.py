@@ -18,8 +18,9 @@ from ._errors import IdentificationWarning, NonPeriodicExcitationWarning
 from ._excitation import Multisine, period_samples
 from ._linear import AnyController, core_controller, require_stable, settle_periods_for, settling_radius
 from ._params import Rig
+from ._ross import to_ross
 from ._validate import integer, optional_positive, real, require, rig_and_controller, seed_value, series
-from .io import ONE_AXIS, estimate_fields_from_csv, estimate_fields_from_dataset, register_estimate_kind
+from .io import ONE_AXIS, estimate_fields_from_csv, estimate_fields_from_dataset, register_estimate_kind, save_estimate
 
 
 @dataclass(frozen=True, eq=False)
@@ -124,8 +125,6 @@ class Estimate(LineEstimate):
     def save(self, path: str | Path) -> Path:
         """Write atomically to ``.csv`` (a metadata header and a SHA-256) or ``.nc`` (NetCDF, checksummed);
         :func:`amb_fast.load_estimate` reads it back, unexcited lines and metadata included."""
-        from .io import save_estimate
-
         return save_estimate(self, path)
 
     def to_xarray(self):  # noqa: ANN201 - xarray is optional
@@ -143,8 +142,6 @@ class Estimate(LineEstimate):
     def to_ross(self, n: int, *, smoothed: bool = False, **kwargs: Any) -> Any:
         """This estimate as a symmetric ``ross.BearingElement`` at node ``n``: k, c on both axes, no cross
         terms, over the lines in rad/s (see :func:`amb_fast.two_axis.to_ross`; needs the ``ross`` extra)."""
-        from ._ross import to_ross
-
         return to_ross(self, n, smoothed=smoothed, **kwargs)
 
 
