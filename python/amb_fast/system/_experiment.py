@@ -236,6 +236,14 @@ class BearingEstimate(ArrayRecord):
         return to_ross(self, n, smoothed=smoothed, **kwargs)
 
 
+def line_spectra(x: np.ndarray, period: int, harmonics: Any = slice(None)) -> np.ndarray:  # noqa: ANN401
+    """(experiments, periods * period, channels) to per-period line spectra (periods, lines, channel,
+    experiment) at ``harmonics`` (default: every bin), unscaled DFT bins as the core's."""
+    E, n, N = x.shape
+    bins = np.fft.rfft(x.reshape(E, n // period, period, N), axis=2)[:, :, harmonics]
+    return np.ascontiguousarray(bins.transpose(1, 2, 3, 0))
+
+
 def median_lines(x: np.ndarray, window: int) -> np.ndarray:
     """Running median across the lines (axis 0) per entry; the ends repeat the edge value."""
     return _core.median_filter(np.ascontiguousarray(x.reshape(x.shape[0], -1)), window).reshape(x.shape)

@@ -20,7 +20,7 @@ from .._excitation import Multisine, period_samples
 from .._linear import iso_zone
 from .._validate import integer, real, require
 from ._control import ControllerSpec, controller_matrix
-from ._experiment import core_args, experiment_seeds
+from ._experiment import core_args, experiment_seeds, line_spectra
 from ._model import System, loop_model, require_stable
 
 
@@ -140,12 +140,7 @@ def identify_sensitivity(
     P = (E.shape[1] - start) // L
     require(P >= 2, "periods after settling", P, ">= 2 (standard errors need at least two)")
     N = E.shape[0]
-
-    def lines(x: np.ndarray) -> np.ndarray:  # (experiment, samples, axis) -> (periods, bins, axis, experiment)
-        periods = x[:, start : start + P * L].reshape(N, P, L, N)
-        return np.fft.rfft(periods, axis=2).transpose(1, 2, 3, 0)
-
-    El, Al = lines(E), lines(A)
+    El, Al = (line_spectra(x[:, start : start + P * L], L) for x in (E, A))
     level = np.abs(El.mean(axis=0)).max(axis=(1, 2))
     excited = np.flatnonzero(level > 1e-3 * level.max())
     excited = excited[(excited > 0) & (excited < L // 2)]
