@@ -45,7 +45,7 @@ class UnexcitedLines(ArrayRecord):
 
 
 @dataclass(frozen=True, eq=False)
-class LineEstimate(ArrayRecord):
+class EstimateBase(ArrayRecord):
     """What every estimate holds at its excited lines ``freq`` (Hz): per line a number for one axis
     (:class:`Estimate`), an N x N matrix for N axes (:class:`~amb_fast.system.EstimateN`); their docstrings
     give the units."""
@@ -64,7 +64,7 @@ class LineEstimate(ArrayRecord):
 
 
 @dataclass(frozen=True, eq=False)
-class Estimate(LineEstimate):
+class Estimate(EstimateBase):
     """Frequency-domain estimate at the excited lines (MODEL.md section 3).
 
     Two estimates are ``==`` when every field but ``meta`` is equal (arrays value by value, NaN equal to

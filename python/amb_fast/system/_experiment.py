@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 from .. import _core
 from .._equality import ArrayRecord
 from .._excitation import Multisine
-from .._experiment import LineEstimate, median_window_value, settle_from
+from .._experiment import EstimateBase, median_window_value, settle_from
 from .._mechanics import Mechanics
 from .._ross import to_ross
 from .._simulate import Channels
@@ -105,7 +105,7 @@ def simulate(
 
 
 @dataclass(frozen=True, eq=False)
-class EstimateN(LineEstimate):
+class EstimateN(EstimateBase):
     """N x N frequency-domain estimate at the excited lines; every matrix has shape (lines, N, N).
 
     Attributes
