@@ -166,6 +166,9 @@ def _cached_plan(harmonics_bytes: bytes, period: int, skip_bytes: bytes = b"") -
     return _core.LinePlan(period=period, excited=harmonics, unexcited=unexcited), unexcited
 
 
+_RAW = ("H", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std", "force", "displacement")  # as the core gives them
+
+
 def _estimate(
     raw: _core.LineEstimate,
     harmonics: np.ndarray,
@@ -179,16 +182,8 @@ def _estimate(
         weak = _checks.weak_lines(raw.force, raw.displacement, raw.unexcited_force, raw.unexcited_displacement)
     return Estimate(
         freq=harmonics * f0,
-        H=raw.H,
         receptance=1.0 / raw.H,
-        k=raw.k,
-        c=raw.c,
-        k_smooth=raw.k_smooth,
-        c_smooth=raw.c_smooth,
-        k_std=raw.k_std,
-        c_std=raw.c_std,
-        force=raw.force,
-        displacement=raw.displacement,
+        **{name: getattr(raw, name) for name in _RAW},
         unexcited=UnexcitedLines(unexcited * f0, raw.unexcited_force, raw.unexcited_displacement),
         periods=int(raw.periods),
         blocks=int(raw.blocks),
