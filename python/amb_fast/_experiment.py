@@ -472,7 +472,7 @@ def _from_fields(fields: dict[str, Any]) -> Estimate:
 register_estimate_kind(
     "# amb_fast estimate",
     ONE_AXIS,
-    lambda text, name: _from_fields(estimate_fields_from_csv(text, name)),
+    lambda text, name: _from_fields(estimate_fields_from_csv(text)),
     lambda ds: _from_fields(estimate_fields_from_dataset(ds)),
     None,
 )

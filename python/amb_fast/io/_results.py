@@ -265,7 +265,7 @@ def load_estimate(path: str | Path) -> Estimate | EstimateN:
     return kind.from_dataset(ds)  # type: ignore[union-attr]
 
 
-def estimate_fields_from_csv(text: str, name: str = "") -> dict[str, Any]:
+def estimate_fields_from_csv(text: str) -> dict[str, Any]:
     """:class:`Estimate`'s fields (``unexcited``: its three arrays) from a ``.csv`` file's checked text."""
     meta, _, table = read_csv(text, _COLUMNS)
     col = {column: table[:, j] for j, column in enumerate(_COLUMNS)}
