@@ -18,7 +18,9 @@ from ._errors import IdentificationWarning, NonPeriodicExcitationWarning
 from ._excitation import Multisine, period_samples
 from ._linear import AnyController, core_controller, require_stable, settle_periods_for, settling_radius
 from ._params import Rig
+from ._ross import to_ross
 from ._validate import integer, optional_positive, real, require, rig_and_controller, seed_value, series
+from .io import ONE_AXIS, estimate_fields_from_csv, estimate_fields_from_dataset, register_estimate_kind, save_estimate
 
 
 @dataclass(frozen=True, eq=False)
@@ -43,7 +45,26 @@ class UnexcitedLines(ArrayRecord):
 
 
 @dataclass(frozen=True, eq=False)
-class Estimate(ArrayRecord):
+class EstimateBase(ArrayRecord):
+    """What every estimate holds at its excited lines ``freq`` (Hz): per line a number for one axis
+    (:class:`Estimate`), an N x N matrix for N axes (:class:`~amb_fast.system.EstimateN`); their docstrings
+    give the units."""
+
+    freq: np.ndarray
+    H: np.ndarray
+    receptance: np.ndarray
+    k: np.ndarray
+    c: np.ndarray
+    k_smooth: np.ndarray
+    c_smooth: np.ndarray
+    k_std: np.ndarray
+    c_std: np.ndarray
+    force: np.ndarray
+    displacement: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class Estimate(EstimateBase):
     """Frequency-domain estimate at the excited lines (MODEL.md section 3).
 
     Two estimates are ``==`` when every field but ``meta`` is equal (arrays value by value, NaN equal to
@@ -89,17 +110,6 @@ class Estimate(ArrayRecord):
         fs, f0, mass, settle_periods. Saved with the estimate (:meth:`save`).
     """
 
-    freq: np.ndarray
-    H: np.ndarray
-    receptance: np.ndarray
-    k: np.ndarray
-    c: np.ndarray
-    k_smooth: np.ndarray
-    c_smooth: np.ndarray
-    k_std: np.ndarray
-    c_std: np.ndarray
-    force: np.ndarray
-    displacement: np.ndarray
     unexcited: UnexcitedLines
     periods: int
     blocks: int
@@ -115,8 +125,6 @@ class Estimate(ArrayRecord):
     def save(self, path: str | Path) -> Path:
         """Write atomically to ``.csv`` (a metadata header and a SHA-256) or ``.nc`` (NetCDF, checksummed);
         :func:`amb_fast.load_estimate` reads it back, unexcited lines and metadata included."""
-        from .io import save_estimate
-
         return save_estimate(self, path)
 
     def to_xarray(self):  # noqa: ANN201 - xarray is optional
@@ -134,8 +142,6 @@ class Estimate(ArrayRecord):
     def to_ross(self, n: int, *, smoothed: bool = False, **kwargs: Any) -> Any:
         """This estimate as a symmetric ``ross.BearingElement`` at node ``n``: k, c on both axes, no cross
         terms, over the lines in rad/s (see :func:`amb_fast.two_axis.to_ross`; needs the ``ross`` extra)."""
-        from ._ross import to_ross
-
         return to_ross(self, n, smoothed=smoothed, **kwargs)
 
 
@@ -160,6 +166,9 @@ def _cached_plan(harmonics_bytes: bytes, period: int, skip_bytes: bytes = b"") -
     return _core.LinePlan(period=period, excited=harmonics, unexcited=unexcited), unexcited
 
 
+_RAW = ("H", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std", "force", "displacement")  # as the core gives them
+
+
 def _estimate(
     raw: _core.LineEstimate,
     harmonics: np.ndarray,
@@ -173,16 +182,8 @@ def _estimate(
         weak = _checks.weak_lines(raw.force, raw.displacement, raw.unexcited_force, raw.unexcited_displacement)
     return Estimate(
         freq=harmonics * f0,
-        H=raw.H,
         receptance=1.0 / raw.H,
-        k=raw.k,
-        c=raw.c,
-        k_smooth=raw.k_smooth,
-        c_smooth=raw.c_smooth,
-        k_std=raw.k_std,
-        c_std=raw.c_std,
-        force=raw.force,
-        displacement=raw.displacement,
+        **{name: getattr(raw, name) for name in _RAW},
         unexcited=UnexcitedLines(unexcited * f0, raw.unexcited_force, raw.unexcited_displacement),
         periods=int(raw.periods),
         blocks=int(raw.blocks),
@@ -192,10 +193,14 @@ def _estimate(
     )
 
 
-def _window(median_window: int) -> int:
+def median_window_value(median_window: int) -> int:
+    """``median_window``, checked: a positive odd number of lines."""
     window = integer("median_window", median_window, 1)
     require(window % 2 == 1, "median_window", median_window, "odd")
     return window
+
+
+_window = median_window_value  # the one-axis sweep's name for it
 
 
 MAX_AUTOMATIC_SETTLE = 10_000
@@ -206,13 +211,19 @@ def automatic_settle(rig: Rig, controller: AnyController, radius: float, period:
     enough for the slowest pole to decay below 1e-9; more than 10^4 is refused, naming the pole."""
     if start == "steady" and rig.force_law == "linear":
         return 0
-    slowest = float(settling_radius(rig, controller, radius))
+    origin = "rest" if start == "rest" else "the linearised steady state"
+    return settle_from(float(settling_radius(rig, controller, radius)), period, origin)
+
+
+def settle_from(slowest: float, period: int, origin: str = "rest") -> int:
+    """Periods of ``period`` samples for a pole of radius ``slowest`` to decay below 1e-9 (settling from
+    ``origin``); more than 10^4 is refused, naming the pole."""
     periods = int(settle_periods_for(np.array(slowest), period))
     if periods > MAX_AUTOMATIC_SETTLE:
         raise ValueError(
-            f"settling from {'rest' if start == 'rest' else 'the linearised steady state'} would take {periods} "
-            f"periods (> {MAX_AUTOMATIC_SETTLE}): the slowest pole has |z| = {slowest:.12g}, a stability margin "
-            f"of 1 - |z| = {1 - slowest:.3g} per sample; use start='steady' (linear rigs) or give settle_periods"
+            f"settling from {origin} would take {periods} periods (> {MAX_AUTOMATIC_SETTLE}): the slowest pole has "
+            f"|z| = {slowest:.12g}, a stability margin of 1 - |z| = {1 - slowest:.3g} per sample; use "
+            "start='steady' (linear rigs) or give settle_periods"
         )
     return periods
 
@@ -265,7 +276,7 @@ def run_experiment(
     pid = controller
     require(excitation.fs == pid.fs, "excitation.fs", excitation.fs, f"equal to the controller's fs ({pid.fs} Hz)")
     periods = integer("periods", periods, 2)
-    window = _window(median_window)
+    window = median_window_value(median_window)
     period = excitation.period_samples
     require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
     poles = require_stable(rig, pid)
@@ -347,7 +358,7 @@ def identify(
     fs = real("fs", fs, "Hz", positive=True)
     f0 = real("f0", f0, "Hz", positive=True)
     mass = real("mass", mass, "kg", positive=True)
-    window = _window(median_window)
+    window = median_window_value(median_window)
     settle_periods = integer("settle_periods", settle_periods, 0)
     period = period_samples(fs, f0)
     start = settle_periods * period
@@ -451,3 +462,17 @@ def excited_lines(
             "pure-noise force, or pass lines= or f_max="
         )
     return found
+
+
+def _from_fields(fields: dict[str, Any]) -> Estimate:
+    return Estimate(**fields | {"unexcited": UnexcitedLines(*fields["unexcited"])})
+
+
+# amb_fast.load_estimate (the io layer) reads the one-axis files through this
+register_estimate_kind(
+    "# amb_fast estimate",
+    ONE_AXIS,
+    lambda text, name: _from_fields(estimate_fields_from_csv(text)),
+    lambda ds: _from_fields(estimate_fields_from_dataset(ds)),
+    None,
+)

@@ -19,7 +19,25 @@ from ._validate import rig_and_controller, seed_value, series
 
 
 @dataclass(frozen=True, eq=False)
-class Trace(ArrayRecord):
+class Channels(ArrayRecord):
+    """Recorded channels sampled at ``fs`` (Hz): force (N), displacement (m), current (A); for N axes a column
+    per axis (:class:`Trace`, :class:`~amb_fast.system.TraceN`)."""
+
+    force: np.ndarray
+    displacement: np.ndarray
+    current: np.ndarray
+    fs: float
+
+    @cached_property
+    def time(self) -> np.ndarray:
+        """Sample instants kT, s (computed once, read-only)."""
+        t = np.arange(self.force.shape[0]) / self.fs
+        t.flags.writeable = False
+        return t
+
+
+@dataclass(frozen=True, eq=False)
+class Trace(Channels):
     """Recorded channels of one run, all sampled at ``fs``.
 
     Attributes
@@ -36,18 +54,7 @@ class Trace(ArrayRecord):
         The rig, the controller and the seed of the run (saved with the recording by :meth:`save`).
     """
 
-    force: np.ndarray
-    displacement: np.ndarray
-    current: np.ndarray
-    fs: float
     meta: dict = field(default_factory=dict, repr=False, compare=False)
-
-    @cached_property
-    def time(self) -> np.ndarray:
-        """Sample instants kT, s (computed once, read-only)."""
-        t = np.arange(self.force.size) / self.fs
-        t.flags.writeable = False
-        return t
 
     def save(self, path: str | Path) -> None:
         """Write force and displacement as a recording (``.csv`` or ``.mat``), see :func:`load_recording`."""

@@ -21,28 +21,44 @@ from ._channels import UNITS as CHANNEL_UNITS
 from ._channels import split_unit
 from ._netcdf import read_netcdf, write_dataset_netcdf, write_netcdf
 from ._recording import Recording, load_recording, save_recording
-from ._results import UNITS as RESULT_UNITS
 from ._results import (
+    ONE_AXIS,
+    complex_array,
     digest,
+    estimate_fields_from_csv,
+    estimate_fields_from_dataset,
     figure_metadata,
     load_estimate,
     pandas_module,
+    read_csv,
     read_npz,
     register_estimate_kind,
     save_estimate,
     version,
+    write_csv,
+    write_npz,
+    xarray_module,
 )
+from ._results import UNITS as RESULT_UNITS
 from ._text import sniff
 
 __all__ = [
     "CHANNEL_UNITS",
+    "ONE_AXIS",
     "RESULT_UNITS",
     "Recording",
+    "complex_array",
     "digest",
+    "estimate_fields_from_csv",
+    "estimate_fields_from_dataset",
     "figure_metadata",
     "pandas_module",
+    "read_csv",
     "read_npz",
     "register_estimate_kind",
+    "write_csv",
+    "write_npz",
+    "xarray_module",
     "version",
     "write_dataset_netcdf",
     "atomic_path",

@@ -12,13 +12,14 @@ import hashlib
 import json
 import zipfile
 import zlib
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._validate import require
-from ._atomic import atomic_text
+from ._atomic import atomic_path, atomic_text
 
 if TYPE_CHECKING:
     from .._experiment import Estimate
@@ -27,24 +28,26 @@ if TYPE_CHECKING:
 ESTIMATE_SUFFIXES = (".csv", ".nc")
 
 
+@dataclasses.dataclass(frozen=True)
 class EstimateKind:
-    """How a file holds an estimate of another kind (the N-axis model's, registered by ``amb_fast.system``: this
-    lower layer never imports it): its CSV's first line, its NetCDF ``amb_fast_kind``, and its readers."""
+    """How files hold one kind of estimate, registered by the layer that defines it (this lower layer imports
+    none): its CSV's first line, its NetCDF ``amb_fast_kind`` and its readers."""
 
-    csv_head: str = ""
-    kind: str = ""
-    from_csv: Any = None  # (text, file name) -> estimate
-    from_dataset: Any = None  # NetCDF dataset -> estimate
-    from_npz: Any = None  # path -> estimate
+    csv_head: str
+    kind: str
+    from_csv: Callable[[str, str], Any]  # (checked text, file name) -> estimate
+    from_dataset: Callable[[Any], Any]  # NetCDF dataset -> estimate
+    from_npz: Callable[[Path], Any] | None  # path -> estimate
 
 
-N_AXES = EstimateKind()
+KINDS: list[EstimateKind] = []
+ONE_AXIS = "Estimate"  # the one-axis files' kind: their NetCDF has an ``amb_fast`` attribute (metadata), no kind
 
 
 def register_estimate_kind(csv_head: str, kind: str, from_csv: Any, from_dataset: Any, from_npz: Any) -> None:
-    """Let :func:`load_estimate` read the N-axis model's files (called by ``amb_fast.system`` on import)."""
-    N_AXES.csv_head, N_AXES.kind = csv_head, kind
-    N_AXES.from_csv, N_AXES.from_dataset, N_AXES.from_npz = from_csv, from_dataset, from_npz
+    """Let :func:`load_estimate` read a kind of estimate's files (``amb_fast`` and ``amb_fast.system`` call it on
+    import); ``from_npz`` None: that kind has no ``.npz`` files."""
+    KINDS.append(EstimateKind(csv_head, kind, from_csv, from_dataset, from_npz))
 
 
 _COLUMNS = (  # CSV column -> (Estimate field or expression, unit)
@@ -119,12 +122,8 @@ def estimate_dataset_parts(estimate: Estimate) -> tuple[dict[str, tuple], dict[s
 
 
 def estimate_to_xarray(estimate: Estimate):  # noqa: ANN201 - xarray is optional
-    try:
-        import xarray as xr
-    except ImportError as error:
-        raise ImportError("to_xarray needs xarray: pip install 'amb_fast[xarray]'") from error
     data, coords, attrs = estimate_dataset_parts(estimate)
-    return xr.Dataset(data, coords=coords, attrs=attrs)
+    return xarray_module().Dataset(data, coords=coords, attrs=attrs)
 
 
 def estimate_to_dataframe(estimate: Estimate):  # noqa: ANN201 - pandas is optional
@@ -158,6 +157,14 @@ def pandas_module():  # noqa: ANN202
     return pd
 
 
+def xarray_module():  # noqa: ANN202
+    try:
+        import xarray as xr
+    except ImportError as error:
+        raise ImportError("to_xarray needs xarray: pip install 'amb_fast[xarray]'") from error
+    return xr
+
+
 def _weak(estimate: Estimate) -> np.ndarray:
     return np.zeros(estimate.freq.size, bool) if estimate.weak is None else np.asarray(estimate.weak, bool)
 
@@ -186,24 +193,49 @@ def save_estimate(estimate: Estimate, path: str | Path) -> Path:
     suffix = path.suffix.lower()
     require(suffix in ESTIMATE_SUFFIXES, "path", str(path), "a file name ending in .csv or .nc")
     if suffix == ".csv":
-        lines = [f"# amb_fast estimate, version {version()}", "# meta: " + json.dumps(metadata(estimate)),
-                 ",".join(_COLUMNS)]  # fmt: skip
-        lines += [",".join(f"{v:.17g}" for v in row) for row in _table(estimate)]
-        body = "\n".join(lines) + "\n"
-        atomic_text(path, f"# sha256: {digest([body.encode()])}\n" + body)
-        return path
+        return write_csv(path, "# amb_fast estimate", metadata(estimate), _COLUMNS, _table(estimate))
     from ._netcdf import write_estimate_netcdf
 
     return write_estimate_netcdf(estimate, path)  # with h5netcdf alone: xarray's file, without importing xarray
 
 
+def write_csv(path: Path, head: str, meta: dict[str, Any], names: Sequence[str], table: np.ndarray) -> Path:
+    """A table written atomically as CSV: ``head`` and the version, ``# meta:`` and ``meta`` as JSON, the column
+    names, every value to 17 digits; a SHA-256 of all that in its first line (:func:`load_estimate` checks it)."""
+    lines = [f"{head}, version {version()}", "# meta: " + json.dumps(meta), ",".join(names)]
+    lines += [",".join(f"{v:.17g}" for v in row) for row in table]
+    body = "\n".join(lines) + "\n"
+    atomic_text(path, f"# sha256: {digest([body.encode()])}\n" + body)
+    return path
+
+
+def read_csv(text: str, columns: Sequence[str] | None = None) -> tuple[dict[str, Any], list[str], np.ndarray]:
+    """The metadata, the column names (these ``columns``, if given) and the table of a :func:`write_csv` file's
+    checked text."""
+    meta = json.loads(next(line for line in text.splitlines() if line.startswith("# meta: "))[8:])
+    rows = [line for line in text.splitlines() if line and not line.startswith("#")]
+    header = rows[0].split(",")
+    require(columns is None or header == list(columns), "header", rows[0][:60], "the columns of an amb_fast estimate")
+    table = np.array([[float(v) for v in line.split(",")] for line in rows[1:]], dtype=float)
+    return meta, header, table.reshape(-1, len(header))
+
+
+def write_npz(path: Path, header: dict[str, Any], arrays: dict[str, Any]) -> None:
+    """Arrays and a JSON ``header`` (with the amb_fast version) in a compressed ``.npz``, written atomically."""
+    with atomic_path(path) as target, open(target, "wb") as handle:
+        np.savez_compressed(handle, header=json.dumps(header | {"version": version()}), **arrays)
+
+
+def complex_array(real: np.ndarray, imag: np.ndarray) -> np.ndarray:
+    """``real + j imag`` bit for bit (``real + 1j * imag`` turns -0.0 into 0.0 and an infinite part into NaN)."""
+    out = np.empty(np.shape(real), dtype=complex)
+    out.real, out.imag = real, imag
+    return out
+
+
 def load_estimate(path: str | Path) -> Estimate | EstimateN:
     """Read an estimate written by :meth:`Estimate.save` (``.csv`` or ``.nc``) or :meth:`EstimateN.save`
     (``.csv``, ``.nc`` or ``.npz``: an :class:`EstimateN`); a damaged file is refused, naming it."""
-    from .._experiment import Estimate, UnexcitedLines
-
-    n_axes = N_AXES  # estimates of N axes (registered by amb_fast.system): the file says which kind it holds
-
     path = Path(path)
     require(path.is_file(), "path", str(path), "an existing file")
     suffix = path.suffix.lower()
@@ -211,56 +243,58 @@ def load_estimate(path: str | Path) -> Estimate | EstimateN:
         suffix in (*ESTIMATE_SUFFIXES, ".npz"), "path", str(path), "a file name ending in .csv or .nc, or .npz (N axes)"
     )
     if suffix == ".npz":
-        return n_axes.from_npz(path)
+        return next(kind.from_npz for kind in KINDS if kind.from_npz)(path)
     if suffix == ".csv":
         raw = path.read_bytes()
         first, _, body = raw.partition(b"\n")
+        text = body.decode(errors="replace")
         if not first.startswith(b"# sha256: "):
             raise ValueError(f"{path.name} is not an estimate written by amb_fast (no '# sha256:' first line)")
         if first[10:].strip().decode(errors="replace") != digest([body]):
             raise ValueError(f"{path.name} is damaged: its content does not match its SHA-256 checksum")
-        text = body.decode()
-        if n_axes.csv_head and text.startswith(n_axes.csv_head):
-            return n_axes.from_csv(text, path.name)
-        meta = json.loads(next(line for line in text.splitlines() if line.startswith("# meta: "))[8:])
-        table = _csv_rows(text)
-        col = {name: table[:, j] for j, name in enumerate(_COLUMNS)}
-        excited = col["excited"] == 1.0
-        pick = {name: values[excited] for name, values in col.items()}
-        rest = {name: values[~excited] for name, values in col.items()}
-        arrays = {
-            "freq": pick["freq_Hz"], "H": pick["H_real_N_per_m"] + 1j * pick["H_imag_N_per_m"],
-            "force": pick["force_real_N"] + 1j * pick["force_imag_N"],
-            "displacement": pick["displacement_real_m"] + 1j * pick["displacement_imag_m"],
-            "weak": pick["weak"] == 1.0,
-            **{n: pick[c] for n, c in zip(_REAL, _COLUMNS[5:11])},
-        }  # fmt: skip
-        unexcited = UnexcitedLines(rest["freq_Hz"], rest["force_abs_N"], rest["displacement_abs_m"])
-    else:
-        from ._netcdf import read_netcdf
+        kind = next((kind for kind in KINDS if text.startswith(f"{kind.csv_head}, version ")), None)
+        require(kind is not None, "path", str(path), "a .csv file written by Estimate.save or EstimateN.save")
+        return kind.from_csv(text, path.name)  # type: ignore[union-attr]
+    from ._netcdf import read_netcdf
 
-        ds = read_netcdf(path)
-        if n_axes.kind and ds.attrs.get("amb_fast_kind") == n_axes.kind:
-            return n_axes.from_dataset(ds)
-        require("amb_fast" in ds.attrs, "path", str(path), "a .nc file written by Estimate.save or EstimateN.save "
-                "(this one holds another dataset: a sweep's loads with load_sweep or SweepResultN.load)")  # fmt: skip
-        meta = json.loads(ds.attrs["amb_fast"])
-        arrays = {n: np.asarray(ds[n].values) for n in _REAL}
-        for n in ("H", "force", "displacement"):
-            arrays[n] = np.asarray(ds[f"{n}_real"].values) + 1j * np.asarray(ds[f"{n}_imag"].values)
-        arrays["freq"] = np.asarray(ds.freq.values)
-        arrays["weak"] = np.asarray(ds.weak.values).astype(bool)
-        unexcited = UnexcitedLines(np.asarray(ds.unexcited_freq.values), np.asarray(ds.unexcited_force.values),
-                                   np.asarray(ds.unexcited_displacement.values))  # fmt: skip
+    ds = read_netcdf(path)
+    name = ds.attrs.get("amb_fast_kind", ONE_AXIS if "amb_fast" in ds.attrs else None)
+    kind = next((kind for kind in KINDS if kind.kind == name), None)
+    require(kind is not None, "path", str(path), "a .nc file written by Estimate.save or EstimateN.save "
+            "(this one holds another dataset: a sweep's loads with load_sweep or SweepResultN.load)")  # fmt: skip
+    return kind.from_dataset(ds)  # type: ignore[union-attr]
+
+
+def estimate_fields_from_csv(text: str) -> dict[str, Any]:
+    """:class:`Estimate`'s fields (``unexcited``: its three arrays) from a ``.csv`` file's checked text."""
+    meta, _, table = read_csv(text, _COLUMNS)
+    col = {column: table[:, j] for j, column in enumerate(_COLUMNS)}
+    excited = col["excited"] == 1.0
+    pick = {column: values[excited] for column, values in col.items()}
+    rest = {column: values[~excited] for column, values in col.items()}
+    arrays = {
+        "freq": pick["freq_Hz"], "H": complex_array(pick["H_real_N_per_m"], pick["H_imag_N_per_m"]),
+        "force": complex_array(pick["force_real_N"], pick["force_imag_N"]),
+        "displacement": complex_array(pick["displacement_real_m"], pick["displacement_imag_m"]),
+        "weak": pick["weak"] == 1.0, **{n: pick[c] for n, c in zip(_REAL, _COLUMNS[5:11])},
+    }  # fmt: skip
+    return _fields(meta, arrays, (rest["freq_Hz"], rest["force_abs_N"], rest["displacement_abs_m"]))
+
+
+def estimate_fields_from_dataset(ds: Any) -> dict[str, Any]:  # noqa: ANN401 - an xarray Dataset
+    """:class:`Estimate`'s fields (``unexcited``: its three arrays) from its ``.nc`` file's Dataset."""
+    arrays = {n: np.asarray(ds[n].values) for n in (*_REAL, "freq")}
+    for n in ("H", "force", "displacement"):
+        arrays[n] = complex_array(np.asarray(ds[f"{n}_real"].values), np.asarray(ds[f"{n}_imag"].values))
+    arrays["weak"] = np.asarray(ds.weak.values).astype(bool)
+    unexcited = (ds.unexcited_freq.values, ds.unexcited_force.values, ds.unexcited_displacement.values)
+    return _fields(json.loads(ds.attrs["amb_fast"]), arrays, tuple(np.asarray(v) for v in unexcited))
+
+
+def _fields(meta: dict[str, Any], arrays: dict[str, np.ndarray], unexcited: tuple) -> dict[str, Any]:
     scalars = {k: meta.pop(k) for k in ("periods", "blocks", "saturated_samples")}
     meta.pop("amb_fast_version", None)
-    return Estimate(receptance=1.0 / arrays["H"], unexcited=unexcited, meta=meta, **arrays, **scalars)
-
-
-def _csv_rows(text: str) -> np.ndarray:
-    rows = [line for line in text.splitlines() if line and not line.startswith("#")]
-    require(rows[0] == ",".join(_COLUMNS), "header", rows[0][:60], "the columns of an amb_fast estimate")
-    return np.array([[float(v) for v in line.split(",")] for line in rows[1:]], dtype=float).reshape(-1, len(_COLUMNS))
+    return {"receptance": 1.0 / arrays["H"], "unexcited": unexcited, "meta": meta, **arrays, **scalars}
 
 
 # -- other writers' helpers -----------------------------------------------------------------------------------------

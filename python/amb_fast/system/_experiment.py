@@ -13,7 +13,6 @@ import functools
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from functools import cached_property
 from typing import Any, ClassVar, Literal
 
 import numpy as np
@@ -23,10 +22,10 @@ from numpy.typing import ArrayLike
 from .. import _core
 from .._equality import ArrayRecord
 from .._excitation import Multisine
-from .._experiment import MAX_AUTOMATIC_SETTLE
-from .._linear import settle_periods_for
+from .._experiment import EstimateBase, median_window_value, settle_from
 from .._mechanics import Mechanics
 from .._ross import to_ross
+from .._simulate import Channels
 from .._validate import integer, require, seed_value
 from ..plots import plot_coefficients_n
 from . import _results
@@ -48,7 +47,7 @@ def hadamard_signs(n: int) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class TraceN(ArrayRecord):
+class TraceN(Channels):
     """Recorded channels of one run of N axes, sampled at ``fs``; one column per axis.
 
     Attributes
@@ -65,18 +64,7 @@ class TraceN(ArrayRecord):
         The axes' names.
     """
 
-    force: np.ndarray
-    displacement: np.ndarray
-    current: np.ndarray
-    fs: float
     axes: tuple[str, ...]
-
-    @cached_property
-    def time(self) -> np.ndarray:
-        """Sample instants kT, s (computed once, read-only)."""
-        t = np.arange(self.force.shape[0]) / self.fs
-        t.flags.writeable = False
-        return t
 
 
 def core_args(model: LoopModel, system: System, outputs: int | None = None) -> dict[str, np.ndarray]:
@@ -117,7 +105,7 @@ def simulate(
 
 
 @dataclass(frozen=True, eq=False)
-class EstimateN(ArrayRecord):
+class EstimateN(EstimateBase):
     """N x N frequency-domain estimate at the excited lines; every matrix has shape (lines, N, N).
 
     Attributes
@@ -150,17 +138,6 @@ class EstimateN(ArrayRecord):
         time and the mass loading, as the model knows them; None from shakers.
     """
 
-    freq: np.ndarray
-    H: np.ndarray
-    receptance: np.ndarray
-    k: np.ndarray
-    c: np.ndarray
-    k_smooth: np.ndarray
-    c_smooth: np.ndarray
-    k_std: np.ndarray
-    c_std: np.ndarray
-    force: np.ndarray
-    displacement: np.ndarray
     periods: int
     axes: tuple[str, ...]
     process: np.ndarray | None = None
@@ -259,6 +236,14 @@ class BearingEstimate(ArrayRecord):
         return to_ross(self, n, smoothed=smoothed, **kwargs)
 
 
+def line_spectra(x: np.ndarray, period: int, harmonics: Any = slice(None)) -> np.ndarray:  # noqa: ANN401
+    """(experiments, periods * period, channels) to per-period line spectra (periods, lines, channel,
+    experiment) at ``harmonics`` (default: every bin), unscaled DFT bins as the core's."""
+    E, n, N = x.shape
+    bins = np.fft.rfft(x.reshape(E, n // period, period, N), axis=2)[:, :, harmonics]
+    return np.ascontiguousarray(bins.transpose(1, 2, 3, 0))
+
+
 def median_lines(x: np.ndarray, window: int) -> np.ndarray:
     """Running median across the lines (axis 0) per entry; the ends repeat the edge value."""
     return _core.median_filter(np.ascontiguousarray(x.reshape(x.shape[0], -1)), window).reshape(x.shape)
@@ -349,11 +334,7 @@ def settle_for(system: System, fs: float, poles: np.ndarray, period: int) -> int
     for axis in system.axes:
         if axis.force_coupling_tau is not None:
             slowest = max(slowest, float(np.exp(-1.0 / (fs * axis.force_coupling_tau))))
-    periods = int(settle_periods_for(np.array(slowest), period))
-    if periods > MAX_AUTOMATIC_SETTLE:
-        raise ValueError(f"settling from rest would take {periods} periods (> {MAX_AUTOMATIC_SETTLE}): slowest pole "
-                         f"|z| = {slowest:.12g}; use start='steady' or give settle_periods")  # fmt: skip
-    return periods
+    return settle_from(slowest, period)
 
 
 def run_experiment(
@@ -385,8 +366,7 @@ def run_experiment(
     """
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
     periods = integer("periods", periods, 2)
-    window = integer("median_window", median_window, 1)
-    require(window % 2 == 1, "median_window", median_window, "odd")
+    window = median_window_value(median_window)
     require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
     require(exciter in ("shaker", "amb"), "exciter", exciter, "'shaker' (the shakers' forces) or 'amb' (the bearings)")
     mech = system.mechanics()

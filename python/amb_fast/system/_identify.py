@@ -17,14 +17,14 @@ from numpy.typing import ArrayLike
 from .. import _checks
 from .._errors import IdentificationWarning, NonPeriodicExcitationWarning
 from .._excitation import period_samples
-from .._experiment import excited_lines
+from .._experiment import excited_lines, median_window_value
 from .._mechanics import Mechanics
 from .._params import Rig
 from .._validate import integer, real, require
 from ..io import CHANNEL_UNITS as UNITS
 from ..io import Recording, split_unit
 from ._exciter import amb_force, corrected_process
-from ._experiment import EstimateN, estimate
+from ._experiment import EstimateN, estimate, line_spectra
 from ._model import known_dynamics
 
 #: Largest condition number of the experiments' force matrix at a line: beyond it the N experiments do not
@@ -81,14 +81,6 @@ def _force_channel(source: str) -> bool:
         return False
     name, unit = split_unit(match.group(1))
     return "force" in name.lower() or UNITS.get((unit or "").lower(), ("",))[0] == "force"
-
-
-def _spectra(x: np.ndarray, harmonics: np.ndarray, period: int) -> np.ndarray:
-    """(experiments, periods * period, channels) to per-period line spectra (periods, lines, channel,
-    experiment), unscaled DFT bins as the core's."""
-    E, n, N = x.shape
-    bins = np.fft.rfft(x.reshape(E, n // period, period, N), axis=2)[:, :, harmonics]
-    return np.ascontiguousarray(bins.transpose(1, 2, 3, 0))
 
 
 def identify(
@@ -181,8 +173,7 @@ def identify(
         forces, displacements = list(F), list(Y)
     fs = real("fs", fs, "Hz", positive=True)
     f0 = real("f0", f0, "Hz", positive=True)
-    window = integer("median_window", median_window, 1)
-    require(window % 2 == 1, "median_window", median_window, "odd")
+    window = median_window_value(median_window)
     period = period_samples(fs, f0)
     start = integer("settle_periods", settle_periods, 0) * period
     n = min(x.shape[0] for x in forces)
@@ -202,7 +193,7 @@ def identify(
             raise ValueError(f"{name} must be finite, got {float(x[e, s, j])!r} in experiment {e}, axis {names[j]}, "
                              f"sample {s + start}")  # fmt: skip
     harmonics = excited_lines(F[0, :, 0], period, f0, fs, f_max, lines, offset=start)
-    Fp, Yp = _spectra(F, harmonics, period), _spectra(Y, harmonics, period)
+    Fp, Yp = line_spectra(F, period, harmonics), line_spectra(Y, period, harmonics)
     condition = np.linalg.cond(Fp.mean(axis=0))
     bad = ~(condition <= MAX_CONDITION)
     if bad.any():

@@ -20,14 +20,15 @@ import numpy as np
 from .._validate import require
 from ..io import RESULT_UNITS as UNITS
 from ..io import (
-    atomic_path,
-    atomic_text,
-    digest,
+    complex_array,
     pandas_module,
+    read_csv,
     read_npz,
     register_estimate_kind,
-    version,
+    write_csv,
     write_dataset_netcdf,
+    write_npz,
+    xarray_module,
 )
 
 if TYPE_CHECKING:
@@ -47,11 +48,7 @@ def _column(name: str, part: str = "") -> str:
     return "_".join(p for p in (name, part, unit) if p)
 
 
-def _complex(real: np.ndarray, imag: np.ndarray) -> np.ndarray:
-    """``real + j imag`` bit for bit (``real + 1j * imag`` turns -0.0 into 0.0 and an infinite part into NaN)."""
-    out = np.empty(np.shape(real), dtype=complex)
-    out.real, out.imag = real, imag
-    return out
+_complex, _write_npz, _xarray = complex_array, write_npz, xarray_module  # the sweeps' files use them too
 
 
 def _fields(est: EstimateN) -> dict[str, np.ndarray]:
@@ -74,19 +71,11 @@ def estimate_parts(est: EstimateN) -> tuple[dict[str, tuple], dict[str, tuple], 
     return data, coords, {"amb_fast_kind": KIND, "periods": est.periods, "axes": json.dumps(list(est.axes))}
 
 
-def _xarray():  # noqa: ANN202
-    try:
-        import xarray as xr
-    except ImportError as error:
-        raise ImportError("to_xarray needs xarray: pip install 'amb_fast[xarray]'") from error
-    return xr
-
-
 def estimate_to_xarray(est: EstimateN):  # noqa: ANN201 - xarray is optional
     """An ``xarray.Dataset``: the matrices over ``(freq, out, in)``, ``force`` and ``displacement`` over
     ``(freq, channel, experiment)``, the axes' names as coordinates, units in every variable's ``attrs``."""
     data, coords, attrs = estimate_parts(est)
-    return _xarray().Dataset(data, coords=coords, attrs=attrs)
+    return xarray_module().Dataset(data, coords=coords, attrs=attrs)
 
 
 def _long(matrices: dict[str, np.ndarray], freq: np.ndarray, names: Any) -> dict[str, np.ndarray]:
@@ -126,26 +115,15 @@ def save_estimate(est: EstimateN, path: str | Path) -> Path:
     path = Path(path)
     suffix = path.suffix.lower()
     require(suffix in SUFFIXES, "path", str(path), "a file name ending in .nc, .npz or .csv")
+    meta = {"periods": est.periods, "axes": list(est.axes)}
     if suffix == ".nc":
         write_dataset_netcdf(path, *estimate_parts(est))
     elif suffix == ".npz":
-        _write_npz(
-            path, {"kind": KIND, "periods": est.periods, "axes": list(est.axes)}, {"freq": est.freq, **_fields(est)}
-        )
+        write_npz(path, {"kind": KIND, **meta}, {"freq": est.freq, **_fields(est)})
     else:
         columns = _long(_fields(est), est.freq, np.arange(len(est.axes)))
-        meta = json.dumps({"periods": est.periods, "axes": list(est.axes)})
-        lines = [f"{CSV_HEAD}, version {version()}", f"# meta: {meta}", ",".join(columns)]
-        lines += [",".join(f"{v:.17g}" for v in row) for row in np.column_stack(list(columns.values()))]
-        body = "\n".join(lines) + "\n"
-        atomic_text(path, f"# sha256: {digest([body.encode()])}\n" + body)
+        write_csv(path, CSV_HEAD, meta, list(columns), np.column_stack(list(columns.values())))
     return path
-
-
-def _write_npz(path: Path, header: dict[str, Any], arrays: dict[str, Any]) -> None:
-    """Arrays and a JSON ``header`` (with the amb_fast version) in a compressed ``.npz``, written atomically."""
-    with atomic_path(path) as target, open(target, "wb") as handle:
-        np.savez_compressed(handle, header=json.dumps(header | {"version": version()}), **arrays)
 
 
 def _build(freq: np.ndarray, arrays: dict[str, np.ndarray], periods: int, axes: list[str]) -> EstimateN:
@@ -159,20 +137,18 @@ def estimate_from_dataset(ds: Any) -> EstimateN:  # noqa: ANN401 - an xarray Dat
     arrays = {name: np.asarray(ds[name].values) for name in MATRICES + AMPLITUDES if name in ds}
     for name in MATRICES + AMPLITUDES:
         if name not in arrays:
-            arrays[name] = _complex(np.asarray(ds[f"{name}_real"].values), np.asarray(ds[f"{name}_imag"].values))
+            arrays[name] = complex_array(np.asarray(ds[f"{name}_real"].values), np.asarray(ds[f"{name}_imag"].values))
     return _build(np.asarray(ds.freq.values), arrays, ds.attrs["periods"], json.loads(ds.attrs["axes"]))
 
 
 def estimate_from_csv(text: str, name: str) -> EstimateN:
     """The estimate of a ``.csv`` file's checked text (after its ``# sha256:`` line); ``name``: the file's."""
-    meta = json.loads(next(line for line in text.splitlines() if line.startswith("# meta: "))[8:])
-    rows = [line for line in text.splitlines() if line and not line.startswith("#")]
-    header = rows[0].split(",")
+    meta, header, table = read_csv(text)
     N = len(meta["axes"])
-    table = np.array([[float(v) for v in line.split(",")] for line in rows[1:]]).reshape(-1, len(header))
     require(table.shape[0] % (N * N) == 0, f"{name} rows", table.shape[0], f"a multiple of {N * N} (N x N per line)")
     col = {c: table[:, k].reshape(-1, N, N) for k, c in enumerate(header)}
-    arrays = {n: col[_column(n)] if _column(n) in col else _complex(col[_column(n, "real")], col[_column(n, "imag")])
+    arrays = {n: col[_column(n)] if _column(n) in col else complex_array(col[_column(n, "real")],
+                                                                        col[_column(n, "imag")])
               for n in MATRICES + AMPLITUDES}  # fmt: skip
     return _build(col["freq_Hz"][:, 0, 0], arrays, meta["periods"], meta["axes"])
 

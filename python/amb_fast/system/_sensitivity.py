@@ -20,7 +20,7 @@ from .._excitation import Multisine, period_samples
 from .._linear import iso_zone
 from .._validate import integer, real, require
 from ._control import ControllerSpec, controller_matrix
-from ._experiment import experiment_seeds
+from ._experiment import core_args, experiment_seeds, line_spectra
 from ._model import System, loop_model, require_stable
 
 
@@ -66,16 +66,6 @@ class SensitivityMeasurement(ArrayRecord):
         return "\n".join(rows)
 
 
-def sensitivity_from_lines(
-    after_lines: np.ndarray, injection_lines: np.ndarray, freq: np.ndarray, axes: tuple[str, ...]
-) -> SensitivityMeasurement:
-    """The measurement from per-period line spectra (periods, lines, channel, experiment) of the signal after
-    the sum and of the test signal: ``Gs = A E^-1`` per line with its variances (the core's N x N estimate)."""
-    S, _, _, _, var_re, var_im = _core.estimate_nxn(np.ascontiguousarray(after_lines),
-                                                    np.ascontiguousarray(injection_lines))  # fmt: skip
-    return _measurement(S, var_re, var_im, freq, int(after_lines.shape[0]), axes)
-
-
 def _measurement(
     S: np.ndarray, var_re: np.ndarray, var_im: np.ndarray, freq: np.ndarray, periods: int, axes: tuple[str, ...]
 ) -> SensitivityMeasurement:
@@ -114,11 +104,10 @@ def measure_sensitivity(
     forces = np.zeros((N, excitation.period_samples, N))
     for j in range(N):
         forces[j, :, j] = excitation.samples
-    Fp, Yp = _core.mimo_line_experiments(
-        M=model.M, Bf=model.Bn, Bn=model.Bn, C=model.C[:N], Dn=model.Dn[:N], transducer_pole=np.zeros(N),
-        sensor_noise=np.array([a.sensor_noise for a in rig.axes]), force_noise=np.zeros(N),
-        period_forces=forces, settle_periods=0, periods=periods, seeds=experiment_seeds(seed, N), steady_start=True,
-        bins=excitation.harmonics)  # fmt: skip
+    args = core_args(model, rig, outputs=N) | dict(Bf=model.Bn, transducer_pole=np.zeros(N), force_noise=np.zeros(N))
+    seeds = experiment_seeds(seed, N)
+    Fp, Yp = _core.mimo_line_experiments(**args, period_forces=forces, settle_periods=0, periods=periods, seeds=seeds,
+                                         steady_start=True, bins=excitation.harmonics)  # fmt: skip
     # Each experiment injects at its own axis, the same every period: per period Gs = (Y + E) / e with e the
     # test signal's line (no inverse), and its scatter is the core's linearised one (dE = 0) to rounding.
     e = np.diagonal(Fp[0], axis1=1, axis2=2)[:, None, :]  # (lines, 1, experiment)
@@ -151,15 +140,13 @@ def identify_sensitivity(
     P = (E.shape[1] - start) // L
     require(P >= 2, "periods after settling", P, ">= 2 (standard errors need at least two)")
     N = E.shape[0]
-
-    def lines(x: np.ndarray) -> np.ndarray:  # (experiment, samples, axis) -> (periods, bins, axis, experiment)
-        periods = x[:, start : start + P * L].reshape(N, P, L, N)
-        return np.fft.rfft(periods, axis=2).transpose(1, 2, 3, 0)
-
-    El, Al = lines(E), lines(A)
+    El, Al = (line_spectra(x[:, start : start + P * L], L) for x in (E, A))
     level = np.abs(El.mean(axis=0)).max(axis=(1, 2))
     excited = np.flatnonzero(level > 1e-3 * level.max())
     excited = excited[(excited > 0) & (excited < L // 2)]
     require(excited.size > 0, "injection", "no line", "a periodic test signal with lines between 0 and fs/2")
     names = axes if axes is not None else tuple(f"axis {j}" for j in range(N))
-    return sensitivity_from_lines(Al[:, excited], El[:, excited], excited * f0, names)
+    # Gs = A E^-1 per line with its variances: the core's N x N estimate
+    S, _, _, _, var_re, var_im = _core.estimate_nxn(np.ascontiguousarray(Al[:, excited]),
+                                                    np.ascontiguousarray(El[:, excited]))  # fmt: skip
+    return _measurement(S, var_re, var_im, excited * f0, P, names)
