@@ -168,25 +168,22 @@ def blas_parked() -> Iterator[None]:
             stop()
 
 
-def one_blas_thread(function: F) -> F:
-    """Run ``function`` with the BLAS libraries of the process on one thread."""
+def _guarded(context: Callable[[], contextlib.AbstractContextManager[None]]) -> Callable[[F], F]:
+    """A decorator that runs a function inside ``context()``, marked ``one_blas_thread`` (tests read it)."""
 
-    @functools.wraps(function)
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
-        with blas_on_one_thread():
-            return function(*args, **kwargs)
+    def decorate(function: F) -> F:
+        @functools.wraps(function)
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            with context():
+                return function(*args, **kwargs)
 
-    wrapper.one_blas_thread = True  # type: ignore[attr-defined]
-    return wrapper  # type: ignore[return-value]
+        wrapper.one_blas_thread = True  # type: ignore[attr-defined]
+        return wrapper  # type: ignore[return-value]
+
+    return decorate
 
 
-def parked_blas(function: F) -> F:
-    """Run ``function`` (a sweep on the core's threads) inside :func:`blas_parked`."""
-
-    @functools.wraps(function)
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
-        with blas_parked():
-            return function(*args, **kwargs)
-
-    wrapper.one_blas_thread = True  # type: ignore[attr-defined]
-    return wrapper  # type: ignore[return-value]
+one_blas_thread = _guarded(blas_on_one_thread)
+one_blas_thread.__doc__ = "Run ``function`` with the BLAS libraries of the process on one thread."
+parked_blas = _guarded(blas_parked)
+parked_blas.__doc__ = "Run ``function`` (a sweep on the core's threads) inside :func:`blas_parked`."

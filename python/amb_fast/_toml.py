@@ -1,5 +1,10 @@
 """Small TOML/JSON files of the package: reading them with errors that name the file, writing them, and
-the rig file (:func:`load_rig`, :func:`save_rig`).
+the rig file (:func:`load_rig`, :func:`save_rig`); the atomic writes every file of the package goes through.
+
+Atomic writes: a temporary file in the target's directory, flushed and fsynced, then ``os.replace``. A write
+that fails part-way (a full disk, an exception in the writer, an interrupt) leaves the old file as it was
+and no temporary file behind, and raises an ``OSError`` that names the path. The new file gets the old
+one's permissions, or a new file's (0666 less the umask): not mkstemp's owner-only 0600.
 
 A rig file holds the fields of :class:`~amb_fast.Rig` at its top level (SI units, ``"none"`` for a stage
 switched off); a field it leaves out takes ``Rig.paper()``'s value, as the command's options do. Other
@@ -15,11 +20,12 @@ not read back::
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import fields, replace
 from pathlib import Path
 from typing import Any
@@ -113,18 +119,66 @@ def _is_tables(value: Any) -> bool:
     return isinstance(value, (list, tuple)) and bool(value) and all(isinstance(v, Mapping) for v in value)
 
 
-def write_text(path: str | os.PathLike[str], text: str) -> Path:
-    """Write ``text`` to ``path`` atomically (a temporary file in the same folder, then renamed)."""
-    file = Path(path)
-    handle, temporary = tempfile.mkstemp(dir=file.parent if str(file.parent) else ".", prefix=f".{file.name}.")
+def _permissions(path: Path) -> int:
+    """The mode ``path`` has, or a file created there with open() would get (0666 less the umask)."""
     try:
-        with os.fdopen(handle, "w", encoding="utf-8") as out:
-            out.write(text)
-        os.replace(temporary, file)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
+        return path.stat().st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0o022)  # read it the only portable way: set and restore at once
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
+def _fsync_dir(directory: Path) -> None:
+    with contextlib.suppress(OSError):  # some platforms cannot open or fsync a directory
+        fd = os.open(directory, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | Path) -> Iterator[Path]:
+    """Yield a temporary path beside ``path`` to write to; on success it replaces ``path`` atomically.
+
+    For writers that want a file name (h5py, xarray, matplotlib, ``scipy.io.savemat``).
+    """
+    path = Path(path)
+    directory = path.parent if str(path.parent) else Path(".")
+    if not directory.is_dir():
+        raise OSError(f"cannot write {str(path)!r}: the directory {str(directory)!r} does not exist")
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp" + path.suffix, dir=directory)
+    os.close(fd)
+    temporary = Path(name)
+    try:
+        yield temporary
+        with open(temporary, "rb+") as handle:
+            os.fsync(handle.fileno())
+        os.chmod(temporary, _permissions(path))
+        os.replace(temporary, path)
+        _fsync_dir(directory)
+    except BaseException as error:
+        with contextlib.suppress(OSError):
+            temporary.unlink()
+        if isinstance(error, OSError):
+            raise OSError(f"could not write {str(path)!r} (the old file, if any, is unchanged): {error}") from error
         raise
-    return file
+
+
+def atomic_write(path: str | Path, write: Callable[[Path], object]) -> Path:
+    """Call ``write(temporary_path)`` and move the result onto ``path`` atomically; return ``path``."""
+    with atomic_path(path) as temporary:
+        write(temporary)
+    return Path(path)
+
+
+def atomic_text(path: str | Path, text: str) -> Path:
+    """Write text (UTF-8) atomically."""
+    return atomic_write(path, lambda p: p.write_text(text, encoding="utf-8"))
+
+
+write_text = atomic_text  # rig and controller files
 
 
 # ---------------------------------------------------------------------------------------------- rig files
