@@ -63,6 +63,13 @@ def require_excitation(
 SAMPLE_PERIODS = 16  # periods the checks read (the averaged estimate reads all of them)
 
 
+def _sampled_periods(signal: np.ndarray, period: int) -> tuple[np.ndarray, int]:
+    """At most SAMPLE_PERIODS of the record's whole periods, spread over it (rows), and how many it has."""
+    periods = signal[: signal.size // period * period].reshape(-1, period)
+    total = periods.shape[0]
+    return periods[np.unique(np.linspace(0, total - 1, min(total, SAMPLE_PERIODS)).astype(int))], total
+
+
 def noise_levels(
     signal: np.ndarray,
     period: int,
@@ -79,9 +86,7 @@ def noise_levels(
     """
     if unexcited.size:
         return unexcited
-    periods = signal.reshape(-1, period)
-    total = periods.shape[0]
-    pick = periods[np.unique(np.linspace(0, total - 1, min(total, SAMPLE_PERIODS)).astype(int))]
+    pick, total = _sampled_periods(signal, period)
     scale = np.sqrt(pick.shape[0] / total)
     top = int(harmonics.max())
     above = np.arange(top + 1, period // 2)
@@ -121,10 +126,7 @@ def top_harmonic(period: int) -> int:
 def period_spectra(signal: np.ndarray, period: int) -> np.ndarray:
     """Spectra (amplitudes, complex) of at most SAMPLE_PERIODS periods spread over the record, at harmonics
     1..top_harmonic(period): column h - 1 is harmonic h. A few periods suffice for the checks."""
-    periods = signal[: signal.size // period * period].reshape(-1, period)
-    total = periods.shape[0]
-    pick = periods[np.unique(np.linspace(0, total - 1, min(total, SAMPLE_PERIODS)).astype(int))]
-    return np.fft.rfft(pick, axis=1)[:, 1 : top_harmonic(period) + 1] * (2.0 / period)
+    return np.fft.rfft(_sampled_periods(signal, period)[0], axis=1)[:, 1 : top_harmonic(period) + 1] * (2.0 / period)
 
 
 def excited_harmonics(spectra: np.ndarray) -> np.ndarray:
@@ -260,33 +262,20 @@ def warn_implausible(
     stiffness = float(np.median(np.abs(k)))
     dynamic = float(np.median(np.abs(H)))
     ratio = float(np.median(np.abs(H) / inertia)) if inertia is not None and inertia.size else np.inf
+    messages = []
     if dynamic < 1.0:
-        warnings.warn(
-            f"the median |F/Y| is {dynamic:.3g} N/m: force and displacement look swapped (or not in N and m)",
-            IdentificationWarning,
-            stacklevel=stacklevel,
-        )
+        messages.append(f"the median |F/Y| is {dynamic:.3g} N/m: force and displacement look swapped (or not in N "
+                        "and m)")  # fmt: skip
     elif ratio < TOO_LIGHT:
-        warnings.warn(
-            f"the force is {ratio:.2g} of what accelerating the given mass takes (median |F/Y| / (m w^2) over "
-            "the lines): is the force in kN instead of N, or the mass not in kg?",
-            IdentificationWarning,
-            stacklevel=stacklevel,
-        )
+        messages.append(f"the force is {ratio:.2g} of what accelerating the given mass takes (median |F/Y| / (m w^2) "
+                        "over the lines): is the force in kN instead of N, or the mass not in kg?")  # fmt: skip
     elif not STIFFNESS[0] <= stiffness <= STIFFNESS[1]:
-        warnings.warn(
-            f"the median stiffness {stiffness:.3g} N/m is outside {STIFFNESS[0]:g}-{STIFFNESS[1]:g} N/m: check the "
-            "units of force (N) and displacement (m)",
-            IdentificationWarning,
-            stacklevel=stacklevel,
-        )
+        messages.append(f"the median stiffness {stiffness:.3g} N/m is outside {STIFFNESS[0]:g}-{STIFFNESS[1]:g} N/m: "
+                        "check the units of force (N) and displacement (m)")  # fmt: skip
     amplitude = 0.5 * float(np.ptp(displacement)) if displacement.size else 0.0  # a few periods suffice
-    limit = DISPLACEMENT if clearance is None else clearance
-    if amplitude > limit:
+    if amplitude > (DISPLACEMENT if clearance is None else clearance):
         what = f"the clearance {clearance:g} m" if clearance is not None else f"{DISPLACEMENT * 1e3:g} mm"
-        warnings.warn(
-            f"the displacement amplitude {amplitude:.3g} m is above {what}: is the displacement in mm or um "
-            "instead of m? (load_recording scales a unit in the column name)",
-            IdentificationWarning,
-            stacklevel=stacklevel,
-        )
+        messages.append(f"the displacement amplitude {amplitude:.3g} m is above {what}: is the displacement in mm or "
+                        "um instead of m? (load_recording scales a unit in the column name)")  # fmt: skip
+    for message in messages:
+        warnings.warn(message, IdentificationWarning, stacklevel=stacklevel)

@@ -67,10 +67,9 @@ def _scale(name: str, quantity: str, path: Path) -> float:
 def scaled(name: str, quantity: str) -> str:
     """A channel's name for ``Recording.source``, with the scaling its unit implied: ``"'x [um]' (um -> m)"``."""
     unit = split_unit(name)[1]
-    si = {"force": "N", "displacement": "m", "time": "s"}[quantity]
-    if not unit or unit == si or (1e6 if unit == "MN" else UNITS.get(unit.lower(), ("", 1.0))[1]) == 1.0:
+    if not unit or (1e6 if unit == "MN" else UNITS.get(unit.lower(), ("", 1.0))[1]) == 1.0:
         return repr(name)
-    return f"{name!r} ({unit} -> {si})"
+    return f"{name!r} ({unit} -> {dict(force='N', displacement='m')[quantity]})"
 
 
 def _index(names: list[str], key: str | int, role: str, path: Path) -> int:
@@ -118,12 +117,10 @@ def _time_index(names: list[str], time: str | int | None, path: Path) -> int | N
     time column (``Time [s]``, ``TIME``, ``t [ms]``, ``Zeit``, LabVIEW's ``X_Value``, ...). None if absent."""
     if time is None:
         return None
-    if isinstance(time, (int, np.integer)) and not isinstance(time, bool):
-        return _index(names, int(time), "time", path)
     try:
-        return _find(names, str(time), "time", path)
+        return _index(names, time, "time", path)
     except ValueError:
-        if str(time) != "time":
+        if not isinstance(time, str) or time != "time":
             raise
     hits = [i for i, n in enumerate(names) if split_unit(n)[0].strip().casefold() in TIME_NAMES]
     if len(hits) > 1:  # two columns that could be the clock: guessing one could give a wrong fs

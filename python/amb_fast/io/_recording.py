@@ -148,25 +148,28 @@ def load_recording(
     require(suffix in SUFFIXES, "path", str(path), f"a recording ending in {', '.join(SUFFIXES)}")
     if fs is not None:
         fs = real("fs", fs, "Hz", positive=True)
-    if suffix == ".mat":
-        groups = _read_mat(path)
-    elif suffix == ".tdms":
-        groups = _read_tdms(path)
+    name = ""
+    if suffix in (".mat", ".tdms"):
+        name, channels = _choose_recording(_read_mat(path) if suffix == ".mat" else _read_tdms(path), path, recording,
+                                           (force, displacement))  # fmt: skip
+        f_name, f_values = _channel(channels, force, "force", path)
+        y_name, y_values = _channel(channels, displacement, "displacement", path)
+        sizes = (np.size(f_values), np.size(y_values))
+        if sizes[0] != sizes[1] or sizes[0] < 2:  # a scalar (such as 'fs') chosen by index, or two recordings'
+            raise ValueError(f"{path.name}: the force {f_name!r} has {sizes[0]} samples and the displacement "
+                             f"{y_name!r} {sizes[1]}: choose two channels of the same recording, of at least 2 "
+                             "samples")  # fmt: skip
+        names, (found, origin) = list(channels), _file_fs(channels, time, path)
+        f_values, y_values = np.array(f_values, dtype=float), np.array(y_values, dtype=float)  # scaled in place
     else:
-        return Recording(*_load_text(path, force, displacement, fs, time))
-    name, channels = _choose_recording(groups, path, recording, (force, displacement))
-    f_name, f_values = _channel(channels, force, "force", path)
-    y_name, y_values = _channel(channels, displacement, "displacement", path)
-    sizes = (np.size(f_values), np.size(y_values))
-    if sizes[0] != sizes[1] or sizes[0] < 2:  # a scalar (such as 'fs') chosen by index, or two recordings' channels
-        raise ValueError(f"{path.name}: the force {f_name!r} has {sizes[0]} samples and the displacement {y_name!r} "
-                         f"{sizes[1]}: choose two channels of the same recording, of at least 2 samples")  # fmt: skip
-    f_values = f_values * _scale(f_name, "force", path)
-    y_values = y_values * _scale(y_name, "displacement", path)
-    found, origin = _file_fs(channels, time, path)
-    fs = _agree(fs, found, path, origin, list(channels))
-    where = f"{path.name}" + (f" recording {name!r}" if name else "")
-    clock = f"; fs {fs:.10g} Hz from its {origin}" if found is not None else f"; fs {fs:.10g} Hz given"
+        names, f_name, f_values, y_name, y_values, found, origin = _load_text(path, force, displacement, time)
+    for values, channel, role in ((f_values, f_name, "force"), (y_values, y_name, "displacement")):
+        scale = _scale(channel, role, path)
+        if scale != 1.0:
+            values *= scale
+    fs = _agree(fs, found, path, origin, names)
+    where = path.name + (f" recording {name!r}" if name else "")
+    clock = f"from its {origin}" if found is not None else "given"
     return Recording(series("force", f_values), series("displacement", y_values), fs,
-                     f"{where}: force {scaled(f_name, 'force')}, displacement {scaled(y_name, 'displacement')}{clock}",
-                     fs_origin(found, origin, path, name))  # fmt: skip
+                     f"{where}: force {scaled(f_name, 'force')}, displacement {scaled(y_name, 'displacement')}; "
+                     f"fs {fs:.10g} Hz {clock}", fs_origin(found, origin, path, name))  # fmt: skip
