@@ -10,7 +10,7 @@ import numpy as np
 
 from . import _core
 from ._mechanics import Mechanics
-from ._validate import integer, optional_positive, real, require
+from ._validate import integer, non_negative, optional_positive, real, require
 
 if TYPE_CHECKING:
     from .controllers import Controller
@@ -109,13 +109,11 @@ class Rig:
         for name in ("amp_bandwidth", "eddy_bandwidth", "sensor_bandwidth"):
             optional_positive(name, getattr(self, name), "Hz")
         integer("substeps", self.substeps, 1)
-        require(
-            real("sensor_noise", self.sensor_noise, "m rms") >= 0, "sensor_noise", self.sensor_noise, ">= 0 (m rms)"
-        )
-        require(real("force_noise", self.force_noise, "N rms") >= 0, "force_noise", self.force_noise, ">= 0 (N rms)")
-        require(real("mass_loading", self.mass_loading, "kg") >= 0, "mass_loading", self.mass_loading, ">= 0 (kg)")
+        non_negative("sensor_noise", self.sensor_noise, "m rms")
+        non_negative("force_noise", self.force_noise, "N rms")
+        non_negative("mass_loading", self.mass_loading, "kg")
         optional_positive("force_coupling_tau", self.force_coupling_tau, "s")
-        require(real("dead_time", self.dead_time, "s") >= 0, "dead_time", self.dead_time, ">= 0 (s)")
+        non_negative("dead_time", self.dead_time, "s")
         optional_positive("current_limit", self.current_limit, "A")
         clearance = optional_positive("clearance", self.clearance, "m")
         if clearance is not None and self.force_law == "nonlinear":
