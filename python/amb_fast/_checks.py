@@ -1,15 +1,6 @@
-"""Refuse or warn, never guess: checks of an identification against what the recording itself shows.
-
-- No excitation at the chosen lines (zero, constant or pure-noise force): an error.
-- Lines whose force or displacement is under ``WEAK`` times the unexcited level: flagged (``Estimate.weak``).
-- The first periods differing from the last beyond the period-to-period scatter (a start transient kept): a warning.
-- Implausible magnitudes (stiffness outside 1e2-1e9 N/m, a displacement above 10 mm or the clearance,
-  force and displacement swapped, a force too small to have moved the given mass): warnings that name
-  the likely unit mistake.
-- A force that does not repeat with the period fs/f0 (a wrong fs or f0): a warning that names fs, f0 and the
-  share of the force power that does not repeat.
-- Most lines weak: a warning that says how many of how many.
-"""
+"""Refuse or warn, never guess: checks of an identification against what the recording itself shows (no
+excitation: an error; weak lines: flagged; a kept start transient, implausible magnitudes, a non-periodic force
+or a too-short period, most lines weak: warnings that name the likely mistake)."""
 
 from __future__ import annotations
 
@@ -109,13 +100,16 @@ def weak_lines(force: np.ndarray, displacement: np.ndarray, unexcited_force: np.
     return weak
 
 
-def detect_lines(level: np.ndarray) -> np.ndarray:
-    """Harmonic numbers (1-based) that carry excitation: above 1e-3 of the largest and above WEAK times the
-    median of all harmonics (the noise floor while fewer than half the harmonics are excited)."""
-    if level.size == 0 or level.max() <= 0:
+def _lines_above(level: np.ndarray, noise: np.ndarray | float) -> np.ndarray:
+    """Harmonic numbers (1-based, column h - 1 is h) whose level is above 1e-3 of the largest and WEAK x noise."""
+    if level.size == 0 or not level.max() > 0:
         return np.zeros(0, dtype=np.int64)
-    keep = (level > 1e-3 * level.max()) & (level > WEAK * np.median(level))
-    return np.flatnonzero(keep) + 1
+    return np.flatnonzero((level > 1e-3 * level.max()) & (level > WEAK * noise)) + 1
+
+
+def detect_lines(level: np.ndarray) -> np.ndarray:
+    """The lines above WEAK times the median of all harmonics (the noise floor while fewer than half are excited)."""
+    return _lines_above(level, float(np.median(level)) if level.size else 0.0)
 
 
 def top_harmonic(period: int) -> int:
@@ -135,11 +129,7 @@ def excited_harmonics(spectra: np.ndarray) -> np.ndarray:
     average). Unlike :func:`detect_lines`, it holds when most harmonics are excited."""
     if spectra.shape[0] < 2 or spectra.size == 0:
         return np.zeros(0, dtype=np.int64)
-    level = np.abs(spectra.mean(axis=0))
-    if not level.max() > 0:
-        return np.zeros(0, dtype=np.int64)
-    scatter = np.std(spectra, axis=0, ddof=1) / np.sqrt(spectra.shape[0])
-    return np.flatnonzero((level > 1e-3 * level.max()) & (level > WEAK * scatter)) + 1
+    return _lines_above(np.abs(spectra.mean(axis=0)), np.std(spectra, axis=0, ddof=1) / np.sqrt(spectra.shape[0]))
 
 
 def non_periodic_fraction(spectra: np.ndarray, excited: np.ndarray) -> float:

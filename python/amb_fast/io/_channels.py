@@ -1,10 +1,6 @@
-"""What every reader of a recording shares: channel names and their units, a channel by name or index,
-the sampling frequency from ``fs`` or a time column, and the choice among a file's recordings.
-
-A channel is found by name (exact, then without its unit, then the last part of a dSPACE path) or by
-index; a unit in the name (``force [kN]``, ``x (mm)``, ``disp_um``) or in a units row is scaled to SI,
-and a unit that is not a force (for the force) or a length (for the displacement) is refused.
-"""
+"""What every reader of a recording shares: a channel by name (exact, then without case, unit or dSPACE path)
+or index, its unit (in the name or a units row) scaled to SI or refused, fs from ``fs`` or a time column, and
+the choice among a file's recordings."""
 
 from __future__ import annotations
 
@@ -51,25 +47,20 @@ def unit_of(name: str, unit: str, path: Path) -> tuple[str | None, float]:
     return UNITS.get(unit.lower(), (None, 1.0))
 
 
+_QUANTITIES = {"force": ("force", "N, kN, mN, MN"), "displacement": ("length", "m, mm, um, nm"),
+               "time": ("time", "s, ms, us")}  # fmt: skip
+
+
 def _scale(name: str, quantity: str, path: Path) -> float:
+    """The factor to SI of a channel's unit (1 without one); a unit of another quantity is refused."""
     unit = split_unit(name)[1]
-    if unit is None or unit == "":
+    if not unit:
         return 1.0
-    want = {"force": "force", "displacement": "length", "time": "time"}[quantity]
     kind, factor = unit_of(name, unit, path)
-    if kind != want:
-        units = {"force": "N, kN, mN, MN", "length": "m, mm, um, nm", "time": "s, ms, us"}[want]
+    if kind != _QUANTITIES[quantity][0]:
         raise ValueError(f"{path.name}: the {quantity} channel {name!r} has unit {unit!r}; amb_fast needs "
-                         f"one of {units} (scaled to SI), or rescale the column")  # fmt: skip
+                         f"one of {_QUANTITIES[quantity][1]} (scaled to SI), or rescale the column")  # fmt: skip
     return factor
-
-
-def scaled(name: str, quantity: str) -> str:
-    """A channel's name for ``Recording.source``, with the scaling its unit implied: ``"'x [um]' (um -> m)"``."""
-    unit = split_unit(name)[1]
-    if not unit or (1e6 if unit == "MN" else UNITS.get(unit.lower(), ("", 1.0))[1]) == 1.0:
-        return repr(name)
-    return f"{name!r} ({unit} -> {dict(force='N', displacement='m')[quantity]})"
 
 
 def _index(names: list[str], key: str | int, role: str, path: Path) -> int:
@@ -163,16 +154,14 @@ def _quantum(t: np.ndarray) -> float:
     clocks such as Unix timestamps carry it: 2.4e-7 s at 1.7e9 s)."""
     t0, spacing = float(t[0]), float(np.spacing(max(abs(float(t[0])), abs(float(t[-1])))))
     for digits in range(0, 10):
-        ok = True
         tolerance = 1e-6 + 4.0 * spacing * 10.0**digits
         if tolerance > 1e-2:  # digits finer than the floats resolve
             return 0.0
         for a in range(0, t.size, BLOCK):
             x = (t[a : a + BLOCK] - t0) * 10.0**digits
             if float(np.max(np.abs(x))) >= 1e15 or float(np.max(np.abs(x - np.rint(x)))) >= tolerance:
-                ok = False
                 break
-        if ok:
+        else:
             return 10.0**-digits
     return 0.0
 

@@ -1,10 +1,6 @@
-"""Recordings of a rig: CSV/TSV dialects, MATLAB v4-v7 and v7.3 (HDF5), dSPACE exports, NI TDMS.
-
-This module: the :class:`Recording`, :func:`load_recording` (the suffix chooses the reader) and
-:func:`save_recording`. The readers are in ``_text``, ``_mat`` and ``_tdms``: the MATLAB and TDMS readers
-return *recordings*, a name (``""`` for a file's top level) mapped to its channels; the text reader keeps
-only the chosen columns. What they share (channels by name or index, units, fs) is in ``_channels``.
-"""
+"""The :class:`Recording`, :func:`load_recording` (the suffix chooses the reader: ``_text``, ``_mat``, ``_tdms``;
+the MATLAB and TDMS readers return recordings, a name, ``""`` for the top level, mapped to channels) and
+:func:`save_recording`."""
 
 from __future__ import annotations
 
@@ -17,7 +13,7 @@ from numpy.typing import ArrayLike
 from .._equality import ArrayRecord
 from .._validate import real, require, series
 from ._atomic import atomic_write
-from ._channels import _agree, _channel, _choose_recording, _file_fs, _scale, fs_origin, scaled
+from ._channels import _agree, _channel, _choose_recording, _file_fs, _scale, fs_origin, split_unit
 from ._mat import _read_mat
 from ._tdms import _read_tdms
 from ._text import _load_text
@@ -163,13 +159,15 @@ def load_recording(
         f_values, y_values = np.array(f_values, dtype=float), np.array(y_values, dtype=float)  # scaled in place
     else:
         names, f_name, f_values, y_name, y_values, found, origin = _load_text(path, force, displacement, time)
-    for values, channel, role in ((f_values, f_name, "force"), (y_values, y_name, "displacement")):
+    described = []
+    for values, channel, role, si in ((f_values, f_name, "force", "N"), (y_values, y_name, "displacement", "m")):
         scale = _scale(channel, role, path)
         if scale != 1.0:
             values *= scale
+        described.append(f"{role} {channel!r}" + (f" ({split_unit(channel)[1]} -> {si})" if scale != 1.0 else ""))
     fs = _agree(fs, found, path, origin, names)
     where = path.name + (f" recording {name!r}" if name else "")
     clock = f"from its {origin}" if found is not None else "given"
-    return Recording(series("force", f_values), series("displacement", y_values), fs,
-                     f"{where}: force {scaled(f_name, 'force')}, displacement {scaled(y_name, 'displacement')}; "
-                     f"fs {fs:.10g} Hz {clock}", fs_origin(found, origin, path, name))  # fmt: skip
+    source = f"{where}: {', '.join(described)}; fs {fs:.10g} Hz {clock}"
+    return Recording(series("force", f_values), series("displacement", y_values), fs, source,
+                     fs_origin(found, origin, path, name))  # fmt: skip
