@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -165,6 +166,15 @@ class Rig:
         return _platform(self.mass)
 
 
+def _as_controller(operator: str) -> Callable[[PID, Any], Controller]:
+    """A PID's ``operator``: the same operator of its :class:`~amb_fast.Controller`."""
+
+    def method(self: PID, other: Any) -> Controller:
+        return getattr(self.to_controller(), operator)(other)
+
+    return method
+
+
 @dataclass(frozen=True)
 class PID:
     """The digital PID controller of MODEL.md section 2.
@@ -228,21 +238,11 @@ class PID:
     # A PID composes like any controller: as its Controller (``pid * notch``, ``notch * pid``, ``pid + c``,
     # ``2.0 * pid``); the result is a Controller.
     __array_ufunc__ = None  # numpy scalars defer to these operators
-
-    def __mul__(self, other: Any) -> Controller:
-        return self.to_controller().__mul__(other)
-
-    def __rmul__(self, other: Any) -> Controller:
-        return self.to_controller().__rmul__(other)
-
-    def __add__(self, other: Any) -> Controller:
-        return self.to_controller().__add__(other)
-
-    def __radd__(self, other: Any) -> Controller:
-        return self.to_controller().__radd__(other)
-
-    def __sub__(self, other: Any) -> Controller:
-        return self.to_controller().__sub__(other)
+    __mul__ = _as_controller("__mul__")
+    __rmul__ = _as_controller("__rmul__")
+    __add__ = _as_controller("__add__")
+    __radd__ = _as_controller("__radd__")
+    __sub__ = _as_controller("__sub__")
 
     def __rsub__(self, other: Any) -> Controller:
         return (-1.0 * self.to_controller()).__add__(other)
@@ -260,12 +260,11 @@ class PID:
         derivative's (pole a), using ``(1 - z^-1)/(1 - a z^-1) = 1 + (a - 1) z^-1/(1 - a z^-1)``.
         """
         integral_in, derivative_out, D = self._terms(self.kp, self.ki, self.kd)
-        a = self._derivative_pole()
-        poles, inputs, outputs = _modal(self.ki != 0, self.kd != 0, integral_in, derivative_out, a)
-        m = len(poles)
-        A = np.diag(poles).reshape(m, m)
-        B = np.array(inputs, dtype=float).reshape(m, 1)
-        C = np.array(outputs, dtype=float).reshape(1, m)
+        i, d = int(self.ki != 0), int(self.kd != 0)
+        m = i + d
+        A = np.diag([1.0] * i + [self._derivative_pole()] * d).reshape(m, m)
+        B = np.array([integral_in] * i + [1.0] * d, dtype=float).reshape(m, 1)
+        C = np.array([1.0] * i + [derivative_out] * d, dtype=float).reshape(1, m)
         return A, B, C, np.array([[D]])
 
     def _derivative_pole(self) -> float:
@@ -288,21 +287,12 @@ class PID:
         """The core's controllers of this PID with each row of ``gains`` (kp, ki, kd): the numbers of
         ``replace(self, kp=..., ki=..., kd=...)._to_core()``, without making the PIDs (sweeps)."""
         kp, ki, kd = np.ascontiguousarray(gains.T, dtype=float)
-        # the core assembles what _modal lays out, entry by entry (the terms are arrays of kp's shape)
+        # the core assembles what state_space lays out, entry by entry (the terms are arrays of kp's shape)
         return _core.pid_controllers(*self._terms(kp, ki, kd), ki=ki, kd=kd, pole=self._derivative_pole(), fs=self.fs,
                                      delay=self.delay)  # fmt: skip
 
     def _to_core(self) -> _core.Controller:
         return _core_pid(self)
-
-
-def _modal(
-    with_integral: bool, with_derivative: bool, integral_in: float, derivative_out: float, pole: float
-) -> tuple[list[float], list[float], list[float]]:
-    """A PID's modal states, their poles, inputs and outputs: the integral's (pole 1) where ki != 0, then
-    the derivative's (pole ``pole``) where kd != 0 (:meth:`PID.state_space`)."""
-    i, d = int(with_integral), int(with_derivative)
-    return [1.0] * i + [pole] * d, [integral_in] * i + [1.0] * d, [1.0] * i + [derivative_out] * d
 
 
 _RIG_FIELDS = tuple(f.name for f in fields(Rig))
