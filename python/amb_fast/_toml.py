@@ -1,21 +1,8 @@
-"""Small TOML/JSON files of the package: reading them with errors that name the file, writing them, and
-the rig file (:func:`load_rig`, :func:`save_rig`); the atomic writes every file of the package goes through.
-
-Atomic writes: a temporary file in the target's directory, flushed and fsynced, then ``os.replace``. A write
-that fails part-way (a full disk, an exception in the writer, an interrupt) leaves the old file as it was
-and no temporary file behind, and raises an ``OSError`` that names the path. The new file gets the old
-one's permissions, or a new file's (0666 less the umask): not mkstemp's owner-only 0600.
-
-A rig file holds the fields of :class:`~amb_fast.Rig` at its top level (SI units, ``"none"`` for a stage
-switched off); a field it leaves out takes ``Rig.paper()``'s value, as the command's options do. Other
-tables (``[fit]`` of a file that :meth:`amb_fast.RigFit.save` writes) are a record for the reader and are
-not read back::
-
-    mass = 0.92              # kg
-    kyy = -53300.0           # N/m
-    kiy = 47.19              # N/A
-    amp_bandwidth = 3000.0   # Hz, or "none"
-    force_law = "linear"
+"""Small TOML/JSON files: reading them with errors that name the file, writing TOML, rig files (:func:`load_rig`,
+:func:`save_rig`), and the atomic writes every file of the package goes through: a temporary file beside the
+target, fsynced, then ``os.replace``. A failed write (a full disk, an exception in the writer, an interrupt)
+leaves the old file and no temporary file behind and raises an ``OSError`` naming the path; the new file gets
+the old one's permissions, or a new file's (0666 less the umask), not mkstemp's owner-only 0600.
 """
 
 from __future__ import annotations
@@ -98,21 +85,17 @@ def to_toml(data: Mapping[str, Any], comments: Mapping[str, str] | None = None) 
     of ``dict``) one level deep; ``comments`` a trailing ``# ...`` per top-level key."""
     comments = comments or {}
     out: list[str] = []
-    plain = {k: v for k, v in data.items() if not _is_table(v) and not _is_tables(v)}
+    plain = {k: v for k, v in data.items() if not isinstance(v, Mapping) and not _is_tables(v)}
     for key, value in plain.items():
         note = f"  # {comments[key]}" if key in comments else ""
         out.append(f"{key} = {_value(value)}{note}")
     for key, value in data.items():
-        if _is_table(value):
+        if isinstance(value, Mapping):
             out += ["", f"[{key}]"] + [f"{k} = {_value(v)}" for k, v in value.items()]
         elif _is_tables(value):
             for table in value:
                 out += ["", f"[[{key}]]"] + [f"{k} = {_value(v)}" for k, v in table.items()]
     return "\n".join(out) + "\n"
-
-
-def _is_table(value: Any) -> bool:
-    return isinstance(value, Mapping)
 
 
 def _is_tables(value: Any) -> bool:
@@ -188,11 +171,6 @@ _RIG_UNITS = {"mass": "kg", "kyy": "N/m", "kiy": "N/A", "bias_current": "A", "am
               "clearance": "m", "current_limit": "A", "dead_time": "s"}  # fmt: skip
 
 
-def rig_table(rig: Rig) -> dict[str, Any]:
-    """The fields of ``rig`` as a rig file writes them (``"none"`` for None)."""
-    return {f.name: "none" if getattr(rig, f.name) is None else getattr(rig, f.name) for f in fields(Rig)}
-
-
 def save_rig(rig: Rig, path: str | os.PathLike[str], extra: Mapping[str, Mapping[str, Any]] | None = None) -> Path:
     """Write ``rig`` to a TOML rig file (read back by :func:`load_rig`); ``extra`` tables are appended."""
     if not isinstance(rig, Rig):
@@ -201,7 +179,8 @@ def save_rig(rig: Rig, path: str | os.PathLike[str], extra: Mapping[str, Mapping
     if file.suffix.lower() != ".toml":
         raise ValueError(f"path must end in .toml (a rig file), got {str(file)!r}")
     header = "# amb_fast rig file: Rig fields in SI units ('none': stage switched off); load with amb_fast.load_rig\n"
-    return write_text(file, header + to_toml({**rig_table(rig), **(extra or {})}, _RIG_UNITS))
+    table = {f.name: "none" if getattr(rig, f.name) is None else getattr(rig, f.name) for f in fields(Rig)}
+    return write_text(file, header + to_toml({**table, **(extra or {})}, _RIG_UNITS))
 
 
 def load_rig(path: str | os.PathLike[str]) -> Rig:

@@ -49,7 +49,7 @@ _RATE_LINE = re.compile(
     re.IGNORECASE,
 )
 _RATE_UNITS = {"hz": 1.0, "khz": 1e3, "s/s": 1.0, "sa/s": 1.0, "samples/s": 1.0, "ks/s": 1e3, "/s": 1.0, "1/s": 1.0}
-_STEP_UNITS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6}
+_STEP_UNITS = {unit: factor for unit, (quantity, factor) in UNITS.items() if quantity == "time"}
 
 
 def stated_rate(lines: list[str], path: Path) -> tuple[float, str] | None:
@@ -212,42 +212,33 @@ def _chunks(path: Path, dialect: _Dialect, use: list[int]) -> Iterator[np.ndarra
         import pandas as pd
     except ImportError:
         pd = None
-    if pd is not None and not dialect.comment_percent and len(dialect.names) <= WIDE:
-        rows_per_chunk = max(256, CHUNK_BYTES // dialect.line_bytes)
-        reader = pd.read_csv(
-            path, sep=dialect.delimiter or r"\s+", header=None, skiprows=dialect.skip, usecols=sorted(set(use)),
-            chunksize=rows_per_chunk, dtype=np.float64, decimal="," if dialect.decimal_comma else ".",
-            comment="#", quotechar='"', skipinitialspace=True, encoding="utf-8-sig", engine="c",
-        )  # fmt: skip
-        rows = 0
-        try:
-            with reader:
+    rows = 0
+    try:
+        if pd is not None and not dialect.comment_percent and len(dialect.names) <= WIDE:
+            with pd.read_csv(
+                path, sep=dialect.delimiter or r"\s+", header=None, skiprows=dialect.skip, usecols=sorted(set(use)),
+                chunksize=max(256, CHUNK_BYTES // dialect.line_bytes), dtype=np.float64,
+                decimal="," if dialect.decimal_comma else ".", comment="#", quotechar='"', skipinitialspace=True,
+                encoding="utf-8-sig", engine="c",
+            ) as reader:  # fmt: skip
                 for frame in reader:
                     yield frame[use].to_numpy(dtype=np.float64)
                     rows += len(frame)
-        except (ValueError, TypeError) as error:
-            raise ValueError(f"{path.name}: a row after line {dialect.skip + rows} is not numeric ({error})") from None
-        return
-    rows = 0
-    with open(path, encoding="utf-8-sig", errors="replace", newline="") as handle:
-        for _ in range(dialect.skip):
-            handle.readline()
-        while True:
-            block = handle.readlines(CHUNK_BYTES)
-            if not block:
-                return
-            if dialect.decimal_comma:
-                block = [line.replace(",", ".") for line in block]
-            if '"' in block[0] or '"' in block[-1]:
-                block = [line.replace('"', "") for line in block]
-            try:
+            return
+        with open(path, encoding="utf-8-sig", errors="replace", newline="") as handle:
+            for _ in range(dialect.skip):
+                handle.readline()
+            while block := handle.readlines(CHUNK_BYTES):
+                if dialect.decimal_comma:
+                    block = [line.replace(",", ".") for line in block]
+                if '"' in block[0] or '"' in block[-1]:
+                    block = [line.replace('"', "") for line in block]
                 chunk = np.loadtxt(block, delimiter=dialect.delimiter, usecols=use, ndmin=2, comments=("#", "%"),
                                    dtype=np.float64)  # fmt: skip
-            except ValueError as error:
-                raise ValueError(f"{path.name}: a row after line {dialect.skip + rows} is not numeric ({error})") \
-                    from None  # fmt: skip
-            rows += chunk.shape[0]
-            yield chunk
+                yield chunk
+                rows += chunk.shape[0]
+    except (ValueError, TypeError) as error:
+        raise ValueError(f"{path.name}: a row after line {dialect.skip + rows} is not numeric ({error})") from None
 
 
 def _count_rows(path: Path, skip: int) -> int:
