@@ -17,6 +17,13 @@ if TYPE_CHECKING:
     from .controllers import Controller
 
 ForceLaw = Literal["linear", "nonlinear"]
+#: The unit of each number of a Rig and a PID (their checks' messages, rig files).
+UNITS = {
+    "mass": "kg", "kyy": "N/m", "kiy": "N/A", "bias_current": "A", "amp_bandwidth": "Hz", "eddy_bandwidth": "Hz",
+    "sensor_bandwidth": "Hz", "sensor_noise": "m rms", "force_noise": "N rms", "mass_loading": "kg",
+    "force_coupling_tau": "s", "clearance": "m", "current_limit": "A", "dead_time": "s",
+    "kp": "A/m", "ki": "A/(m s)", "kd": "A s/m", "derivative_cutoff": "Hz", "fs": "Hz",
+}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -107,15 +114,11 @@ class Rig:
         require(self.force_law in ("linear", "nonlinear"), "force_law", self.force_law, "'linear' or 'nonlinear'")
         if self.force_law == "nonlinear":
             require(self.kyy < 0, "kyy", self.kyy, "< 0 for the non-linear force law (N/m)")
-        for name in ("amp_bandwidth", "eddy_bandwidth", "sensor_bandwidth"):
-            optional_positive(name, getattr(self, name), "Hz")
         integer("substeps", self.substeps, 1)
-        non_negative("sensor_noise", self.sensor_noise, "m rms")
-        non_negative("force_noise", self.force_noise, "N rms")
-        non_negative("mass_loading", self.mass_loading, "kg")
-        optional_positive("force_coupling_tau", self.force_coupling_tau, "s")
-        non_negative("dead_time", self.dead_time, "s")
-        optional_positive("current_limit", self.current_limit, "A")
+        for name in ("amp_bandwidth", "eddy_bandwidth", "sensor_bandwidth", "force_coupling_tau", "current_limit"):
+            optional_positive(name, getattr(self, name), UNITS[name])
+        for name in ("sensor_noise", "force_noise", "mass_loading", "dead_time"):
+            non_negative(name, getattr(self, name), UNITS[name])
         clearance = optional_positive("clearance", self.clearance, "m")
         if clearance is not None and self.force_law == "nonlinear":
             require(clearance < self.gap, "clearance", clearance, f"below the air gap {self.gap:.6g} m")
@@ -208,9 +211,8 @@ class PID:
     delay: int = 1
 
     def __post_init__(self) -> None:
-        real("kp", self.kp, "A/m")
-        real("ki", self.ki, "A/(m s)")
-        real("kd", self.kd, "A s/m")
+        for name in ("kp", "ki", "kd"):
+            real(name, getattr(self, name), UNITS[name])
         optional_positive("derivative_cutoff", self.derivative_cutoff, "Hz")
         real("fs", self.fs, "Hz", positive=True)
         integer("delay", self.delay, 0)

@@ -17,7 +17,7 @@ from dataclasses import fields, replace
 from pathlib import Path
 from typing import Any
 
-from ._params import Rig
+from ._params import UNITS, Rig
 
 
 def read_table(path: str | os.PathLike[str], what: str) -> dict[str, Any]:
@@ -165,10 +165,8 @@ write_text = atomic_text  # rig and controller files
 
 
 # ---------------------------------------------------------------------------------------------- rig files
-_RIG_UNITS = {"mass": "kg", "kyy": "N/m", "kiy": "N/A", "bias_current": "A", "amp_bandwidth": "Hz",
-              "eddy_bandwidth": "Hz", "sensor_bandwidth": "Hz", "substeps": "integration substeps per sample",
-              "sensor_noise": "m rms", "force_noise": "N rms", "mass_loading": "kg", "force_coupling_tau": "s",
-              "clearance": "m", "current_limit": "A", "dead_time": "s"}  # fmt: skip
+_RIG_UNITS = {**{f.name: UNITS[f.name] for f in fields(Rig) if f.name in UNITS},
+              "substeps": "integration substeps per sample"}  # fmt: skip
 
 
 def save_rig(rig: Rig, path: str | os.PathLike[str], extra: Mapping[str, Mapping[str, Any]] | None = None) -> Path:
