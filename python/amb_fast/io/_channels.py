@@ -137,13 +137,6 @@ def _agree(
     return float(given if given is not None else found)  # type: ignore[arg-type]
 
 
-def fs_origin(found: float | None, where: str, path: Path, recording: str = "") -> str:
-    """Where a recording's fs came from, for messages: ``"the time column 'Time [s]' of rig.csv"``, ``"fs="``."""
-    if found is None:
-        return "fs= (given)"
-    return f"the {where} of {path.name}" + (f" recording {recording!r}" if recording else "")
-
-
 BLOCK = 1 << 13  # samples per block of the time column's checks: their temporaries stay small
 
 

@@ -13,7 +13,7 @@ from numpy.typing import ArrayLike
 from .._equality import ArrayRecord
 from .._validate import real, require, series
 from ._atomic import atomic_write
-from ._channels import _agree, _channel, _choose_recording, _file_fs, _scale, fs_origin, split_unit
+from ._channels import _agree, _channel, _choose_recording, _file_fs, _scale, split_unit
 from ._mat import _read_mat
 from ._tdms import _read_tdms
 from ._text import _load_text
@@ -167,7 +167,6 @@ def load_recording(
         described.append(f"{role} {channel!r}" + (f" ({split_unit(channel)[1]} -> {si})" if scale != 1.0 else ""))
     fs = _agree(fs, found, path, origin, names)
     where = path.name + (f" recording {name!r}" if name else "")
-    clock = f"from its {origin}" if found is not None else "given"
-    source = f"{where}: {', '.join(described)}; fs {fs:.10g} Hz {clock}"
-    return Recording(series("force", f_values), series("displacement", y_values), fs, source,
-                     fs_origin(found, origin, path, name))  # fmt: skip
+    source = f"{where}: {', '.join(described)}; fs {fs:.10g} Hz " + ("given" if found is None else f"from its {origin}")
+    fs_from = "fs= (given)" if found is None else f"the {origin} of {where}"
+    return Recording(series("force", f_values), series("displacement", y_values), fs, source, fs_from)
