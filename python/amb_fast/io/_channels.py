@@ -216,7 +216,10 @@ def _file_fs(channels: dict[str, np.ndarray], time: str | int | None, path: Path
     names = list(channels)
     if "fs" in channels:
         where = "channels' wf_increment" if path.suffix.lower() == ".tdms" else "'fs' variable"  # TDMS: the waveform's
-        return float(np.ravel(channels["fs"])[0]), where
+        value = np.ravel(channels["fs"])
+        if value.size != 1 or not value[0] > 0 or not np.isfinite(value[0]):  # never a guess among several
+            raise ValueError(f"{path.name}: its {where} must be one finite number > 0 (Hz), got {value.tolist()}")
+        return float(value[0]), where
     index = _time_index(names, time, path)
     if index is None:
         return None, ""
