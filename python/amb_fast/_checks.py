@@ -31,9 +31,7 @@ def floor(levels: np.ndarray) -> float | None:
     return float(np.median(levels)) if levels.size else None
 
 
-def require_excitation(
-    force_lines: np.ndarray, unexcited_force: np.ndarray, offset: float = 0.0, where: str = ""
-) -> None:
+def require_excitation(force_lines: np.ndarray, unexcited_force: np.ndarray, offset: float = 0.0) -> None:
     """Raise :class:`NoExcitationError` unless the excited lines' force is clearly above the unexcited level.
 
     ``offset`` (N) is a sample of the force: lines under 1e-9 of it are rounding, not excitation (a
@@ -41,11 +39,11 @@ def require_excitation(
     level = float(np.median(np.abs(force_lines))) if force_lines.size else 0.0
     noise = floor(unexcited_force)
     if level <= 1e-9 * abs(offset) or not np.isfinite(level):
-        raise NoExcitationError(f"force has no excitation at the chosen lines{where}: it is zero or constant there "
+        raise NoExcitationError(f"force has no excitation at the chosen lines: it is zero or constant there "
                                 f"({offset:g} N)")  # fmt: skip
     if noise is not None and level <= EXCITED * noise:
         raise NoExcitationError(
-            f"force has no excitation at the chosen lines{where}: their median level {level:.3g} N is not clearly "
+            f"force has no excitation at the chosen lines: their median level {level:.3g} N is not clearly "
             f"above the noise floor {noise:.3g} N (unexcited lines, or the period-to-period scatter; needs > "
             f"{EXCITED:g}x); pure noise, or the wrong lines (pass lines= or f_max=)"
         )

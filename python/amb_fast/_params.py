@@ -271,10 +271,8 @@ class PID:
 
     def _derivative_pole(self) -> float:
         """The derivative filter's pole a = exp(-2 pi fd T) (0 without a filter)."""
-        if self.derivative_cutoff is None:
-            return 0.0
-        T = 1.0 / self.fs
-        return float(np.exp(-2 * np.pi * self.derivative_cutoff * T))
+        cutoff = self.derivative_cutoff
+        return 0.0 if cutoff is None else float(np.exp(-2 * np.pi * cutoff * (1.0 / self.fs)))
 
     def _terms(self, kp: Any, ki: Any, kd: Any) -> tuple[Any, Any, Any]:
         """The integral's input ki T, the derivative's output kd_gain (a - 1) and the direct term
@@ -323,12 +321,7 @@ def _core_controller(
 @functools.lru_cache(maxsize=256)
 def _cached_core_controller(A: bytes, B: bytes, C: bytes, D: float, n: int, fs: float, delay: int) -> _core.Controller:
     return _core.Controller(
-        A=np.frombuffer(A).reshape(n, n),
-        B=np.frombuffer(B),
-        C=np.frombuffer(C),
-        D=D,
-        fs=fs,
-        delay=delay,
+        A=np.frombuffer(A).reshape(n, n), B=np.frombuffer(B), C=np.frombuffer(C), D=D, fs=fs, delay=delay
     )
 
 
