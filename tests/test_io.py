@@ -332,6 +332,17 @@ def test_rig_and_controller_files_get_ordinary_permissions(tmp_path) -> None:
         os.umask(umask)
 
 
+@pytest.mark.parametrize("suffix", [".csv", ".mat"])
+@pytest.mark.parametrize("samples", [5, 20])
+def test_channels_of_different_lengths_are_refused_before_writing(tmp_path, suffix, samples) -> None:
+    """A CSV kept the first 10 of 20 displacement samples silently (or failed with numpy's concatenation error);
+    a .mat was written that load_recording then refused."""
+    path = tmp_path / f"rec{suffix}"
+    with pytest.raises(ValueError, match=rf"displacement samples must be as many as force's \(10\), got {samples}"):
+        af.save_recording(path, force=np.ones(10), displacement=np.zeros(samples), fs=FS)
+    assert not path.exists()
+
+
 def test_a_missing_directory_is_a_clear_error(tmp_path) -> None:
     with pytest.raises(OSError, match="the directory .*nowhere.* does not exist"):
         af.save_recording(tmp_path / "nowhere" / "rec.csv", force=[1.0, 2.0], displacement=[0.0, 0.0], fs=FS)

@@ -64,6 +64,9 @@ def save_recording(
 
     path = Path(path)
     force, displacement = series("force", force), series("displacement", displacement)
+    require(
+        displacement.size == force.size, "displacement samples", displacement.size, f"as many as force's ({force.size})"
+    )
     fs = real("fs", fs, "Hz", positive=True)
     suffix = path.suffix.lower()
     require(suffix in (".csv", ".mat"), "path", str(path), "a file name ending in .csv or .mat")
