@@ -35,28 +35,21 @@ def split_unit(name: str) -> tuple[str, str | None]:
     return name, None
 
 
-def unit_of(name: str, unit: str, path: Path) -> tuple[str | None, float]:
-    """(quantity, factor to SI) of a channel's unit, compared without case except for mega: ``MN`` is a
-    meganewton (1e6 N), not mN; in a name written all in capitals (``FORCE [MN]``) it could be either and is
-    refused."""
-    if unit == "MN":
-        if name.upper() == name:
-            raise ValueError(f"{path.name}: the channel {name!r} has unit 'MN', written in capitals: meganewton or "
-                             "millinewton? Write the unit as 'mN' or 'kN' (or rescale the column to N)")  # fmt: skip
-        return "force", 1e6
-    return UNITS.get(unit.lower(), (None, 1.0))
-
-
 _QUANTITIES = {"force": ("force", "N, kN, mN, MN"), "displacement": ("length", "m, mm, um, nm"),
                "time": ("time", "s, ms, us")}  # fmt: skip
 
 
 def _scale(name: str, quantity: str, path: Path) -> float:
-    """The factor to SI of a channel's unit (1 without one); a unit of another quantity is refused."""
+    """The factor to SI of a channel's unit (1 without one), compared without case except for mega: ``MN`` is
+    a meganewton, not mN, and refused in a name all in capitals (``FORCE [MN]``). Another quantity's unit is
+    refused."""
     unit = split_unit(name)[1]
     if not unit:
         return 1.0
-    kind, factor = unit_of(name, unit, path)
+    if unit == "MN" and name.upper() == name:
+        raise ValueError(f"{path.name}: the channel {name!r} has unit 'MN', written in capitals: meganewton or "
+                         "millinewton? Write the unit as 'mN' or 'kN' (or rescale the column to N)")  # fmt: skip
+    kind, factor = ("force", 1e6) if unit == "MN" else UNITS.get(unit.lower(), (None, 1.0))
     if kind != _QUANTITIES[quantity][0]:
         raise ValueError(f"{path.name}: the {quantity} channel {name!r} has unit {unit!r}; amb_fast needs "
                          f"one of {_QUANTITIES[quantity][1]} (scaled to SI), or rescale the column")  # fmt: skip

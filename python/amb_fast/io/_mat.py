@@ -9,15 +9,11 @@ from pathlib import Path
 import numpy as np
 
 
-def _is_hdf5(path: Path) -> bool:
-    with open(path, "rb") as handle:
-        head = handle.read(520)
-    return head[512:520] == b"\x89HDF\r\n\x1a\n" or head[:8] == b"\x89HDF\r\n\x1a\n"
-
-
 def _read_mat(path: Path) -> dict[str, dict[str, np.ndarray]]:
     """Recordings of a ``.mat`` file: ``""`` for numeric top-level variables, one per dSPACE export struct."""
-    if _is_hdf5(path):
+    with open(path, "rb") as handle:
+        head = handle.read(520)
+    if b"\x89HDF\r\n\x1a\n" in (head[512:520], head[:8]):  # v7.3: HDF5 behind a 512-byte header
         return _read_mat73(path)
     from scipy.io import loadmat
 
@@ -41,10 +37,8 @@ def _read_mat(path: Path) -> dict[str, dict[str, np.ndarray]]:
 
 
 def _dspace(time: np.ndarray, channels: Sequence[tuple[str, object]]) -> dict[str, np.ndarray]:
-    out = {"time": np.asarray(time, dtype=float).ravel()}
-    for name, data in channels:
-        out[name] = np.asarray(data, dtype=float).ravel()
-    return out
+    """A dSPACE export's channels: ``time`` (its X.Data), then each Y(k) by name."""
+    return {"time": np.ravel(np.asarray(time, dtype=float)), **{n: np.ravel(np.asarray(d, float)) for n, d in channels}}
 
 
 def _read_mat73(path: Path) -> dict[str, dict[str, np.ndarray]]:
