@@ -243,12 +243,6 @@ def _chunks(path: Path, dialect: _Dialect, use: list[int]) -> Iterator[np.ndarra
 
 def _count_rows(path: Path, skip: int) -> int:
     """Data rows after ``skip`` lines (blank and comment lines excluded), without holding the file."""
-    count = 0
     with open(path, "rb") as handle:
-        for index, line in enumerate(handle):
-            if index < skip:
-                continue
-            stripped = line.strip()
-            if stripped and not stripped.startswith((b"#", b"%")):
-                count += 1
-    return count
+        rows = (line.strip() for line in itertools.islice(handle, skip, None))
+        return sum(1 for row in rows if row and not row.startswith((b"#", b"%")))
