@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
@@ -11,7 +12,6 @@ import pytest
 
 import amb_fast as af
 from amb_fast import cli
-from amb_fast.io import _atomic
 from cli_helpers import one_error_line, run
 
 
@@ -128,7 +128,7 @@ def test_a_failed_write_is_exit_status_1_and_keeps_the_old_file(capsys, tmp_path
     def disk_full(src, dst):  # noqa: ANN001, ANN202
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(_atomic.os, "replace", disk_full)
+    monkeypatch.setattr(os, "replace", disk_full)
     status, out, err = run(capsys, "run", "--periods", "2", "--save", "est.csv", "--overwrite")
     assert status == 1 and "natural frequency" in out  # the run itself finished
     assert "could not write 'est.csv' (the old file, if any, is unchanged)" in one_error_line(err)

@@ -291,7 +291,7 @@ def test_a_failed_replace_leaves_the_old_estimate_and_a_netcdf_failure_too(tmp_p
         def no_replace(src, dst):  # noqa: ANN001, ANN202
             raise OSError(5, "Input/output error")
 
-        monkeypatch.setattr(_atomic.os, "replace", no_replace)
+        monkeypatch.setattr(os, "replace", no_replace)
         with pytest.raises(OSError, match="could not write"):
             est.save(path)
         monkeypatch.undo()
@@ -317,6 +317,30 @@ def test_written_files_get_ordinary_permissions_and_replaced_files_keep_theirs(t
         assert path.stat().st_mode & 0o777 == 0o640 and path.read_text() == "y"
     finally:
         os.umask(umask)
+
+
+@pytest.mark.skipif(os.name != "posix", reason="POSIX permissions")
+def test_rig_and_controller_files_get_ordinary_permissions(tmp_path) -> None:
+    """save_rig and save_controller wrote through mkstemp and left the files owner-only (0600)."""
+    umask = os.umask(0o022)
+    try:
+        rig = af.save_rig(af.Rig(), tmp_path / "rig.toml")
+        controller = af.save_controller(af.PID.paper(), tmp_path / "c.toml")
+        assert [p.stat().st_mode & 0o777 for p in (rig, controller)] == [0o644, 0o644]
+        assert af.load_rig(rig) == af.Rig() and af.load_controller(controller).fs == 4000.0
+    finally:
+        os.umask(umask)
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".mat"])
+@pytest.mark.parametrize("samples", [5, 20])
+def test_channels_of_different_lengths_are_refused_before_writing(tmp_path, suffix, samples) -> None:
+    """A CSV kept the first 10 of 20 displacement samples silently (or failed with numpy's concatenation error);
+    a .mat was written that load_recording then refused."""
+    path = tmp_path / f"rec{suffix}"
+    with pytest.raises(ValueError, match=rf"displacement samples must be as many as force's \(10\), got {samples}"):
+        af.save_recording(path, force=np.ones(10), displacement=np.zeros(samples), fs=FS)
+    assert not path.exists()
 
 
 def test_a_missing_directory_is_a_clear_error(tmp_path) -> None:

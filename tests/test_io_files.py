@@ -215,3 +215,17 @@ def test_a_header_with_fewer_names_than_columns_is_named_in_the_error(tmp_path, 
         af.load_recording(path)
     rec = af.load_recording(path, force=1, displacement=2, time=0)  # by index, every sample kept
     np.testing.assert_array_equal(rec.force, f)
+
+
+@pytest.mark.parametrize("fs", [np.nan, -4000.0, 0.0, np.zeros(0), np.array([4000.0, 2000.0])])
+def test_an_fs_variable_that_is_not_one_positive_rate_is_refused(tmp_path, fs) -> None:
+    """It became the Recording's fs as it was (nan, -4000, 0), raised an IndexError (empty) or was read as its
+    first value (two)."""
+    from scipy.io import savemat
+
+    path = tmp_path / "rig.mat"
+    x = np.sin(np.arange(400) / 10.0)
+    savemat(path, {"force": x, "displacement": 1e-6 * x, "fs": fs})
+    for given in (None, 4000.0):
+        with pytest.raises(ValueError, match=r"rig.mat: its 'fs' variable must be one finite number > 0 \(Hz\), got"):
+            af.load_recording(path, fs=given)

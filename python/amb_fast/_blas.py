@@ -1,21 +1,11 @@
-"""One BLAS thread inside the functions that make thousands of small matrix operations, and no idle BLAS
-thread spinning on a core while a sweep's own threads run.
+"""One BLAS thread inside functions that make thousands of small matrix operations, and no idle BLAS thread
+spinning on a core while a sweep's own threads run.
 
-Calibration, design and sweeps make thousands of matrix exponentials and solves of 5x5 to 30x30
-matrices. OpenBLAS splits even those across its threads, and their spin-waiting makes them many
-times slower as soon as another process holds a core. Measured on the 2-core machine: a six-parameter
-``fit_rig`` takes 0.24 s alone and 10-13 s beside two busy processes (0.24-0.40 s on one BLAS thread);
-a 200-point sweep over ``amp_bandwidth`` on 2 threads takes 0.44 s alone and 1.2-1.4 s beside one busy
-process (0.27 s and 0.37-0.40 s). Inside the decorated functions BLAS runs on the calling thread; the
-process's own setting is restored on return.
-
-After every multi-threaded call (a user's ``a @ a`` of 300x300, an ``eigvals``), OpenBLAS's worker
-threads (its pthreads build, numpy's and scipy's wheels) busy-wait for 2**28 clock ticks (about 0.1 s)
-before they sleep, and limiting OpenBLAS to one thread does not stop them: a sweep started in that
-window shares its cores with them (40 points: 1.2x from one to two threads instead of 1.75x).
-:func:`blas_parked` stops those idle threads for a sweep (OpenBLAS's own shutdown, the one it runs
-before every ``fork``); setting the thread count back at the end starts them again, as OpenBLAS does
-after a fork.
+OpenBLAS splits even 5x5 to 30x30 solves and exponentials across its threads, whose spin-waiting makes them many
+times slower once another process holds a core (2-core machine: a six-parameter ``fit_rig`` 0.24 s alone, 10-13
+s beside two busy processes, 0.24-0.40 s on one BLAS thread). After a multi-threaded call its idle pthreads
+workers busy-wait about 0.1 s, even when limited to one thread: :func:`blas_parked` stops them for a sweep
+(OpenBLAS's own pre-``fork`` shutdown); setting the thread count back restarts them, as after a fork.
 """
 
 from __future__ import annotations
@@ -40,8 +30,7 @@ _scanned_at = -1  # len(sys.modules) when the libraries were scanned
 
 
 def _blas_controller() -> Any:
-    """threadpoolctl's view of the BLAS libraries loaded; scanned again (a few ms) after modules were
-    imported (scipy's own OpenBLAS arrives with scipy.linalg)."""
+    """threadpoolctl's view of the loaded BLAS libraries, scanned again after imports (scipy.linalg's OpenBLAS)."""
     global _controller, _stoppers, _scanned_at
     if _controller is None or _scanned_at != len(sys.modules):
         from threadpoolctl import ThreadpoolController
@@ -51,10 +40,8 @@ def _blas_controller() -> Any:
 
 
 def _take_blas_control() -> None:
-    """Let this thread set OpenBLAS's process-wide thread count: threadpoolctl (3.6 on) lets only the
-    first thread that set it do so until that is cleared, and ignores the others silently, so a guard
-    entered on one thread and left on another (or entered beside a user's ``threadpool_limits`` on
-    another thread) would limit or restore nothing."""
+    """Let this thread set OpenBLAS's thread count: threadpoolctl >= 3.6 silently ignores all but the first
+    thread that set it, so a guard left on another thread would limit or restore nothing."""
     import threadpoolctl
 
     clear = getattr(getattr(threadpoolctl, "OpenBLASController", None), "clear_controlling_thread", None)
@@ -95,8 +82,7 @@ def blas_threads_limited() -> bool:
 
 
 def _pool_stoppers() -> list[Any]:
-    """OpenBLAS's shutdown of its thread pool, for each loaded OpenBLAS built on pthreads (the ones
-    whose idle workers spin); none for MKL, BLIS or OpenBLAS on OpenMP."""
+    """The pool shutdown of each loaded OpenBLAS on pthreads (whose idle workers spin); none for MKL, BLIS, OpenMP."""
     global _stoppers
     controller = _blas_controller()
     if _stoppers is None:
@@ -113,15 +99,13 @@ def _pool_stoppers() -> list[Any]:
 
 
 def _alone_with_blas() -> bool:
-    """Whether no other Python thread could be inside a BLAS call: all others are daemons (Jupyter's,
-    tqdm's). Stopping a pool while another thread's call uses it could hang that call."""
+    """No other non-daemon Python thread could be in a BLAS call (stopping a pool under one could hang it)."""
     me = threading.current_thread()
     return all(t is me or t.daemon for t in threading.enumerate())
 
 
 def _native_thread_running() -> bool:
-    """Whether a thread Python did not start is running or runnable now (state R in /proc): OpenBLAS's
-    workers are while they spin, and sleep (S) once they stop. Where /proc is missing: assumed."""
+    """A thread Python did not start is in state R in /proc (OpenBLAS's spinning workers); assumed without /proc."""
     try:
         tids = os.listdir("/proc/self/task")
     except OSError:
@@ -168,25 +152,22 @@ def blas_parked() -> Iterator[None]:
             stop()
 
 
-def one_blas_thread(function: F) -> F:
-    """Run ``function`` with the BLAS libraries of the process on one thread."""
+def _guarded(context: Callable[[], contextlib.AbstractContextManager[None]]) -> Callable[[F], F]:
+    """A decorator that runs a function inside ``context()``, marked ``one_blas_thread`` (tests read it)."""
 
-    @functools.wraps(function)
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
-        with blas_on_one_thread():
-            return function(*args, **kwargs)
+    def decorate(function: F) -> F:
+        @functools.wraps(function)
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            with context():
+                return function(*args, **kwargs)
 
-    wrapper.one_blas_thread = True  # type: ignore[attr-defined]
-    return wrapper  # type: ignore[return-value]
+        wrapper.one_blas_thread = True  # type: ignore[attr-defined]
+        return wrapper  # type: ignore[return-value]
+
+    return decorate
 
 
-def parked_blas(function: F) -> F:
-    """Run ``function`` (a sweep on the core's threads) inside :func:`blas_parked`."""
-
-    @functools.wraps(function)
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
-        with blas_parked():
-            return function(*args, **kwargs)
-
-    wrapper.one_blas_thread = True  # type: ignore[attr-defined]
-    return wrapper  # type: ignore[return-value]
+one_blas_thread = _guarded(blas_on_one_thread)
+one_blas_thread.__doc__ = "Run ``function`` with the BLAS libraries of the process on one thread."
+parked_blas = _guarded(blas_parked)
+parked_blas.__doc__ = "Run ``function`` (a sweep on the core's threads) inside :func:`blas_parked`."

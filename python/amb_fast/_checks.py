@@ -1,15 +1,6 @@
-"""Refuse or warn, never guess: checks of an identification against what the recording itself shows.
-
-- No excitation at the chosen lines (zero, constant or pure-noise force): an error.
-- Lines whose force or displacement is under ``WEAK`` times the unexcited level: flagged (``Estimate.weak``).
-- The first periods differing from the last beyond the period-to-period scatter (a start transient kept): a warning.
-- Implausible magnitudes (stiffness outside 1e2-1e9 N/m, a displacement above 10 mm or the clearance,
-  force and displacement swapped, a force too small to have moved the given mass): warnings that name
-  the likely unit mistake.
-- A force that does not repeat with the period fs/f0 (a wrong fs or f0): a warning that names fs, f0 and the
-  share of the force power that does not repeat.
-- Most lines weak: a warning that says how many of how many.
-"""
+"""Refuse or warn, never guess: checks of an identification against what the recording itself shows (no
+excitation: an error; weak lines: flagged; a kept start transient, implausible magnitudes, a non-periodic force
+or a too-short period, most lines weak: warnings that name the likely mistake)."""
 
 from __future__ import annotations
 
@@ -40,9 +31,7 @@ def floor(levels: np.ndarray) -> float | None:
     return float(np.median(levels)) if levels.size else None
 
 
-def require_excitation(
-    force_lines: np.ndarray, unexcited_force: np.ndarray, offset: float = 0.0, where: str = ""
-) -> None:
+def require_excitation(force_lines: np.ndarray, unexcited_force: np.ndarray, offset: float = 0.0) -> None:
     """Raise :class:`NoExcitationError` unless the excited lines' force is clearly above the unexcited level.
 
     ``offset`` (N) is a sample of the force: lines under 1e-9 of it are rounding, not excitation (a
@@ -50,17 +39,24 @@ def require_excitation(
     level = float(np.median(np.abs(force_lines))) if force_lines.size else 0.0
     noise = floor(unexcited_force)
     if level <= 1e-9 * abs(offset) or not np.isfinite(level):
-        raise NoExcitationError(f"force has no excitation at the chosen lines{where}: it is zero or constant there "
+        raise NoExcitationError(f"force has no excitation at the chosen lines: it is zero or constant there "
                                 f"({offset:g} N)")  # fmt: skip
     if noise is not None and level <= EXCITED * noise:
         raise NoExcitationError(
-            f"force has no excitation at the chosen lines{where}: their median level {level:.3g} N is not clearly "
+            f"force has no excitation at the chosen lines: their median level {level:.3g} N is not clearly "
             f"above the noise floor {noise:.3g} N (unexcited lines, or the period-to-period scatter; needs > "
             f"{EXCITED:g}x); pure noise, or the wrong lines (pass lines= or f_max=)"
         )
 
 
 SAMPLE_PERIODS = 16  # periods the checks read (the averaged estimate reads all of them)
+
+
+def _sampled_periods(signal: np.ndarray, period: int) -> tuple[np.ndarray, int]:
+    """At most SAMPLE_PERIODS of the record's whole periods, spread over it (rows), and how many it has."""
+    periods = signal[: signal.size // period * period].reshape(-1, period)
+    total = periods.shape[0]
+    return periods[np.unique(np.linspace(0, total - 1, min(total, SAMPLE_PERIODS)).astype(int))], total
 
 
 def noise_levels(
@@ -79,9 +75,7 @@ def noise_levels(
     """
     if unexcited.size:
         return unexcited
-    periods = signal.reshape(-1, period)
-    total = periods.shape[0]
-    pick = periods[np.unique(np.linspace(0, total - 1, min(total, SAMPLE_PERIODS)).astype(int))]
+    pick, total = _sampled_periods(signal, period)
     scale = np.sqrt(pick.shape[0] / total)
     top = int(harmonics.max())
     above = np.arange(top + 1, period // 2)
@@ -104,13 +98,16 @@ def weak_lines(force: np.ndarray, displacement: np.ndarray, unexcited_force: np.
     return weak
 
 
-def detect_lines(level: np.ndarray) -> np.ndarray:
-    """Harmonic numbers (1-based) that carry excitation: above 1e-3 of the largest and above WEAK times the
-    median of all harmonics (the noise floor while fewer than half the harmonics are excited)."""
-    if level.size == 0 or level.max() <= 0:
+def _lines_above(level: np.ndarray, noise: np.ndarray | float) -> np.ndarray:
+    """Harmonic numbers (1-based, column h - 1 is h) whose level is above 1e-3 of the largest and WEAK x noise."""
+    if level.size == 0 or not level.max() > 0:
         return np.zeros(0, dtype=np.int64)
-    keep = (level > 1e-3 * level.max()) & (level > WEAK * np.median(level))
-    return np.flatnonzero(keep) + 1
+    return np.flatnonzero((level > 1e-3 * level.max()) & (level > WEAK * noise)) + 1
+
+
+def detect_lines(level: np.ndarray) -> np.ndarray:
+    """The lines above WEAK times the median of all harmonics (the noise floor while fewer than half are excited)."""
+    return _lines_above(level, float(np.median(level)) if level.size else 0.0)
 
 
 def top_harmonic(period: int) -> int:
@@ -121,10 +118,7 @@ def top_harmonic(period: int) -> int:
 def period_spectra(signal: np.ndarray, period: int) -> np.ndarray:
     """Spectra (amplitudes, complex) of at most SAMPLE_PERIODS periods spread over the record, at harmonics
     1..top_harmonic(period): column h - 1 is harmonic h. A few periods suffice for the checks."""
-    periods = signal[: signal.size // period * period].reshape(-1, period)
-    total = periods.shape[0]
-    pick = periods[np.unique(np.linspace(0, total - 1, min(total, SAMPLE_PERIODS)).astype(int))]
-    return np.fft.rfft(pick, axis=1)[:, 1 : top_harmonic(period) + 1] * (2.0 / period)
+    return np.fft.rfft(_sampled_periods(signal, period)[0], axis=1)[:, 1 : top_harmonic(period) + 1] * (2.0 / period)
 
 
 def excited_harmonics(spectra: np.ndarray) -> np.ndarray:
@@ -133,11 +127,7 @@ def excited_harmonics(spectra: np.ndarray) -> np.ndarray:
     average). Unlike :func:`detect_lines`, it holds when most harmonics are excited."""
     if spectra.shape[0] < 2 or spectra.size == 0:
         return np.zeros(0, dtype=np.int64)
-    level = np.abs(spectra.mean(axis=0))
-    if not level.max() > 0:
-        return np.zeros(0, dtype=np.int64)
-    scatter = np.std(spectra, axis=0, ddof=1) / np.sqrt(spectra.shape[0])
-    return np.flatnonzero((level > 1e-3 * level.max()) & (level > WEAK * scatter)) + 1
+    return _lines_above(np.abs(spectra.mean(axis=0)), np.std(spectra, axis=0, ddof=1) / np.sqrt(spectra.shape[0]))
 
 
 def non_periodic_fraction(spectra: np.ndarray, excited: np.ndarray) -> float:
@@ -260,33 +250,20 @@ def warn_implausible(
     stiffness = float(np.median(np.abs(k)))
     dynamic = float(np.median(np.abs(H)))
     ratio = float(np.median(np.abs(H) / inertia)) if inertia is not None and inertia.size else np.inf
+    messages = []
     if dynamic < 1.0:
-        warnings.warn(
-            f"the median |F/Y| is {dynamic:.3g} N/m: force and displacement look swapped (or not in N and m)",
-            IdentificationWarning,
-            stacklevel=stacklevel,
-        )
+        messages.append(f"the median |F/Y| is {dynamic:.3g} N/m: force and displacement look swapped (or not in N "
+                        "and m)")  # fmt: skip
     elif ratio < TOO_LIGHT:
-        warnings.warn(
-            f"the force is {ratio:.2g} of what accelerating the given mass takes (median |F/Y| / (m w^2) over "
-            "the lines): is the force in kN instead of N, or the mass not in kg?",
-            IdentificationWarning,
-            stacklevel=stacklevel,
-        )
+        messages.append(f"the force is {ratio:.2g} of what accelerating the given mass takes (median |F/Y| / (m w^2) "
+                        "over the lines): is the force in kN instead of N, or the mass not in kg?")  # fmt: skip
     elif not STIFFNESS[0] <= stiffness <= STIFFNESS[1]:
-        warnings.warn(
-            f"the median stiffness {stiffness:.3g} N/m is outside {STIFFNESS[0]:g}-{STIFFNESS[1]:g} N/m: check the "
-            "units of force (N) and displacement (m)",
-            IdentificationWarning,
-            stacklevel=stacklevel,
-        )
+        messages.append(f"the median stiffness {stiffness:.3g} N/m is outside {STIFFNESS[0]:g}-{STIFFNESS[1]:g} N/m: "
+                        "check the units of force (N) and displacement (m)")  # fmt: skip
     amplitude = 0.5 * float(np.ptp(displacement)) if displacement.size else 0.0  # a few periods suffice
-    limit = DISPLACEMENT if clearance is None else clearance
-    if amplitude > limit:
+    if amplitude > (DISPLACEMENT if clearance is None else clearance):
         what = f"the clearance {clearance:g} m" if clearance is not None else f"{DISPLACEMENT * 1e3:g} mm"
-        warnings.warn(
-            f"the displacement amplitude {amplitude:.3g} m is above {what}: is the displacement in mm or um "
-            "instead of m? (load_recording scales a unit in the column name)",
-            IdentificationWarning,
-            stacklevel=stacklevel,
-        )
+        messages.append(f"the displacement amplitude {amplitude:.3g} m is above {what}: is the displacement in mm or "
+                        "um instead of m? (load_recording scales a unit in the column name)")  # fmt: skip
+    for message in messages:
+        warnings.warn(message, IdentificationWarning, stacklevel=stacklevel)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -10,12 +11,19 @@ import numpy as np
 
 from . import _core
 from ._mechanics import Mechanics
-from ._validate import integer, optional_positive, real, require
+from ._validate import integer, non_negative, optional_positive, real, require
 
 if TYPE_CHECKING:
     from .controllers import Controller
 
 ForceLaw = Literal["linear", "nonlinear"]
+#: The unit of each number of a Rig and a PID (their checks' messages, rig files).
+UNITS = {
+    "mass": "kg", "kyy": "N/m", "kiy": "N/A", "bias_current": "A", "amp_bandwidth": "Hz", "eddy_bandwidth": "Hz",
+    "sensor_bandwidth": "Hz", "sensor_noise": "m rms", "force_noise": "N rms", "mass_loading": "kg",
+    "force_coupling_tau": "s", "clearance": "m", "current_limit": "A", "dead_time": "s",
+    "kp": "A/m", "ki": "A/(m s)", "kd": "A s/m", "derivative_cutoff": "Hz", "fs": "Hz",
+}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -106,17 +114,11 @@ class Rig:
         require(self.force_law in ("linear", "nonlinear"), "force_law", self.force_law, "'linear' or 'nonlinear'")
         if self.force_law == "nonlinear":
             require(self.kyy < 0, "kyy", self.kyy, "< 0 for the non-linear force law (N/m)")
-        for name in ("amp_bandwidth", "eddy_bandwidth", "sensor_bandwidth"):
-            optional_positive(name, getattr(self, name), "Hz")
         integer("substeps", self.substeps, 1)
-        require(
-            real("sensor_noise", self.sensor_noise, "m rms") >= 0, "sensor_noise", self.sensor_noise, ">= 0 (m rms)"
-        )
-        require(real("force_noise", self.force_noise, "N rms") >= 0, "force_noise", self.force_noise, ">= 0 (N rms)")
-        require(real("mass_loading", self.mass_loading, "kg") >= 0, "mass_loading", self.mass_loading, ">= 0 (kg)")
-        optional_positive("force_coupling_tau", self.force_coupling_tau, "s")
-        require(real("dead_time", self.dead_time, "s") >= 0, "dead_time", self.dead_time, ">= 0 (s)")
-        optional_positive("current_limit", self.current_limit, "A")
+        for name in ("amp_bandwidth", "eddy_bandwidth", "sensor_bandwidth", "force_coupling_tau", "current_limit"):
+            optional_positive(name, getattr(self, name), UNITS[name])
+        for name in ("sensor_noise", "force_noise", "mass_loading", "dead_time"):
+            non_negative(name, getattr(self, name), UNITS[name])
         clearance = optional_positive("clearance", self.clearance, "m")
         if clearance is not None and self.force_law == "nonlinear":
             require(clearance < self.gap, "clearance", clearance, f"below the air gap {self.gap:.6g} m")
@@ -167,6 +169,15 @@ class Rig:
         return _platform(self.mass)
 
 
+def _as_controller(operator: str) -> Callable[[PID, Any], Controller]:
+    """A PID's ``operator``: the same operator of its :class:`~amb_fast.Controller`."""
+
+    def method(self: PID, other: Any) -> Controller:
+        return getattr(self.to_controller(), operator)(other)
+
+    return method
+
+
 @dataclass(frozen=True)
 class PID:
     """The digital PID controller of MODEL.md section 2.
@@ -200,9 +211,8 @@ class PID:
     delay: int = 1
 
     def __post_init__(self) -> None:
-        real("kp", self.kp, "A/m")
-        real("ki", self.ki, "A/(m s)")
-        real("kd", self.kd, "A s/m")
+        for name in ("kp", "ki", "kd"):
+            real(name, getattr(self, name), UNITS[name])
         optional_positive("derivative_cutoff", self.derivative_cutoff, "Hz")
         real("fs", self.fs, "Hz", positive=True)
         integer("delay", self.delay, 0)
@@ -230,21 +240,11 @@ class PID:
     # A PID composes like any controller: as its Controller (``pid * notch``, ``notch * pid``, ``pid + c``,
     # ``2.0 * pid``); the result is a Controller.
     __array_ufunc__ = None  # numpy scalars defer to these operators
-
-    def __mul__(self, other: Any) -> Controller:
-        return self.to_controller().__mul__(other)
-
-    def __rmul__(self, other: Any) -> Controller:
-        return self.to_controller().__rmul__(other)
-
-    def __add__(self, other: Any) -> Controller:
-        return self.to_controller().__add__(other)
-
-    def __radd__(self, other: Any) -> Controller:
-        return self.to_controller().__radd__(other)
-
-    def __sub__(self, other: Any) -> Controller:
-        return self.to_controller().__sub__(other)
+    __mul__ = _as_controller("__mul__")
+    __rmul__ = _as_controller("__rmul__")
+    __add__ = _as_controller("__add__")
+    __radd__ = _as_controller("__radd__")
+    __sub__ = _as_controller("__sub__")
 
     def __rsub__(self, other: Any) -> Controller:
         return (-1.0 * self.to_controller()).__add__(other)
@@ -262,20 +262,17 @@ class PID:
         derivative's (pole a), using ``(1 - z^-1)/(1 - a z^-1) = 1 + (a - 1) z^-1/(1 - a z^-1)``.
         """
         integral_in, derivative_out, D = self._terms(self.kp, self.ki, self.kd)
-        a = self._derivative_pole()
-        poles, inputs, outputs = _modal(self.ki != 0, self.kd != 0, integral_in, derivative_out, a)
-        m = len(poles)
-        A = np.diag(poles).reshape(m, m)
-        B = np.array(inputs, dtype=float).reshape(m, 1)
-        C = np.array(outputs, dtype=float).reshape(1, m)
+        i, d = int(self.ki != 0), int(self.kd != 0)
+        m = i + d
+        A = np.diag([1.0] * i + [self._derivative_pole()] * d).reshape(m, m)
+        B = np.array([integral_in] * i + [1.0] * d, dtype=float).reshape(m, 1)
+        C = np.array([1.0] * i + [derivative_out] * d, dtype=float).reshape(1, m)
         return A, B, C, np.array([[D]])
 
     def _derivative_pole(self) -> float:
         """The derivative filter's pole a = exp(-2 pi fd T) (0 without a filter)."""
-        if self.derivative_cutoff is None:
-            return 0.0
-        T = 1.0 / self.fs
-        return float(np.exp(-2 * np.pi * self.derivative_cutoff * T))
+        cutoff = self.derivative_cutoff
+        return 0.0 if cutoff is None else float(np.exp(-2 * np.pi * cutoff * (1.0 / self.fs)))
 
     def _terms(self, kp: Any, ki: Any, kd: Any) -> tuple[Any, Any, Any]:
         """The integral's input ki T, the derivative's output kd_gain (a - 1) and the direct term
@@ -290,21 +287,12 @@ class PID:
         """The core's controllers of this PID with each row of ``gains`` (kp, ki, kd): the numbers of
         ``replace(self, kp=..., ki=..., kd=...)._to_core()``, without making the PIDs (sweeps)."""
         kp, ki, kd = np.ascontiguousarray(gains.T, dtype=float)
-        # the core assembles what _modal lays out, entry by entry (the terms are arrays of kp's shape)
+        # the core assembles what state_space lays out, entry by entry (the terms are arrays of kp's shape)
         return _core.pid_controllers(*self._terms(kp, ki, kd), ki=ki, kd=kd, pole=self._derivative_pole(), fs=self.fs,
                                      delay=self.delay)  # fmt: skip
 
     def _to_core(self) -> _core.Controller:
         return _core_pid(self)
-
-
-def _modal(
-    with_integral: bool, with_derivative: bool, integral_in: float, derivative_out: float, pole: float
-) -> tuple[list[float], list[float], list[float]]:
-    """A PID's modal states, their poles, inputs and outputs: the integral's (pole 1) where ki != 0, then
-    the derivative's (pole ``pole``) where kd != 0 (:meth:`PID.state_space`)."""
-    i, d = int(with_integral), int(with_derivative)
-    return [1.0] * i + [pole] * d, [integral_in] * i + [1.0] * d, [1.0] * i + [derivative_out] * d
 
 
 _RIG_FIELDS = tuple(f.name for f in fields(Rig))
@@ -333,12 +321,7 @@ def _core_controller(
 @functools.lru_cache(maxsize=256)
 def _cached_core_controller(A: bytes, B: bytes, C: bytes, D: float, n: int, fs: float, delay: int) -> _core.Controller:
     return _core.Controller(
-        A=np.frombuffer(A).reshape(n, n),
-        B=np.frombuffer(B),
-        C=np.frombuffer(C),
-        D=D,
-        fs=fs,
-        delay=delay,
+        A=np.frombuffer(A).reshape(n, n), B=np.frombuffer(B), C=np.frombuffer(C), D=D, fs=fs, delay=delay
     )
 
 

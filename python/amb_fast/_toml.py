@@ -1,30 +1,23 @@
-"""Small TOML/JSON files of the package: reading them with errors that name the file, writing them, and
-the rig file (:func:`load_rig`, :func:`save_rig`).
-
-A rig file holds the fields of :class:`~amb_fast.Rig` at its top level (SI units, ``"none"`` for a stage
-switched off); a field it leaves out takes ``Rig.paper()``'s value, as the command's options do. Other
-tables (``[fit]`` of a file that :meth:`amb_fast.RigFit.save` writes) are a record for the reader and are
-not read back::
-
-    mass = 0.92              # kg
-    kyy = -53300.0           # N/m
-    kiy = 47.19              # N/A
-    amp_bandwidth = 3000.0   # Hz, or "none"
-    force_law = "linear"
+"""Small TOML/JSON files: reading them with errors that name the file, writing TOML, rig files (:func:`load_rig`,
+:func:`save_rig`), and the atomic writes every file of the package goes through: a temporary file beside the
+target, fsynced, then ``os.replace``. A failed write (a full disk, an exception in the writer, an interrupt)
+leaves the old file and no temporary file behind and raises an ``OSError`` naming the path; the new file gets
+the old one's permissions, or a new file's (0666 less the umask), not mkstemp's owner-only 0600.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import fields, replace
 from pathlib import Path
 from typing import Any
 
-from ._params import Rig
+from ._params import UNITS, Rig
 
 
 def read_table(path: str | os.PathLike[str], what: str) -> dict[str, Any]:
@@ -92,12 +85,12 @@ def to_toml(data: Mapping[str, Any], comments: Mapping[str, str] | None = None) 
     of ``dict``) one level deep; ``comments`` a trailing ``# ...`` per top-level key."""
     comments = comments or {}
     out: list[str] = []
-    plain = {k: v for k, v in data.items() if not _is_table(v) and not _is_tables(v)}
+    plain = {k: v for k, v in data.items() if not isinstance(v, Mapping) and not _is_tables(v)}
     for key, value in plain.items():
         note = f"  # {comments[key]}" if key in comments else ""
         out.append(f"{key} = {_value(value)}{note}")
     for key, value in data.items():
-        if _is_table(value):
+        if isinstance(value, Mapping):
             out += ["", f"[{key}]"] + [f"{k} = {_value(v)}" for k, v in value.items()]
         elif _is_tables(value):
             for table in value:
@@ -105,38 +98,75 @@ def to_toml(data: Mapping[str, Any], comments: Mapping[str, str] | None = None) 
     return "\n".join(out) + "\n"
 
 
-def _is_table(value: Any) -> bool:
-    return isinstance(value, Mapping)
-
-
 def _is_tables(value: Any) -> bool:
     return isinstance(value, (list, tuple)) and bool(value) and all(isinstance(v, Mapping) for v in value)
 
 
-def write_text(path: str | os.PathLike[str], text: str) -> Path:
-    """Write ``text`` to ``path`` atomically (a temporary file in the same folder, then renamed)."""
-    file = Path(path)
-    handle, temporary = tempfile.mkstemp(dir=file.parent if str(file.parent) else ".", prefix=f".{file.name}.")
+def _permissions(path: Path) -> int:
+    """The mode ``path`` has, or a file created there with open() would get (0666 less the umask)."""
     try:
-        with os.fdopen(handle, "w", encoding="utf-8") as out:
-            out.write(text)
-        os.replace(temporary, file)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
+        return path.stat().st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0o022)  # read it the only portable way: set and restore at once
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
+def _fsync_dir(directory: Path) -> None:
+    with contextlib.suppress(OSError):  # some platforms cannot open or fsync a directory
+        fd = os.open(directory, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | Path) -> Iterator[Path]:
+    """Yield a temporary path beside ``path`` to write to; on success it replaces ``path`` atomically.
+
+    For writers that want a file name (h5py, xarray, matplotlib, ``scipy.io.savemat``).
+    """
+    path = Path(path)
+    directory = path.parent if str(path.parent) else Path(".")
+    if not directory.is_dir():
+        raise OSError(f"cannot write {str(path)!r}: the directory {str(directory)!r} does not exist")
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp" + path.suffix, dir=directory)
+    os.close(fd)
+    temporary = Path(name)
+    try:
+        yield temporary
+        with open(temporary, "rb+") as handle:
+            os.fsync(handle.fileno())
+        os.chmod(temporary, _permissions(path))
+        os.replace(temporary, path)
+        _fsync_dir(directory)
+    except BaseException as error:
+        with contextlib.suppress(OSError):
+            temporary.unlink()
+        if isinstance(error, OSError):
+            raise OSError(f"could not write {str(path)!r} (the old file, if any, is unchanged): {error}") from error
         raise
-    return file
+
+
+def atomic_write(path: str | Path, write: Callable[[Path], object]) -> Path:
+    """Call ``write(temporary_path)`` and move the result onto ``path`` atomically; return ``path``."""
+    with atomic_path(path) as temporary:
+        write(temporary)
+    return Path(path)
+
+
+def atomic_text(path: str | Path, text: str) -> Path:
+    """Write text (UTF-8) atomically."""
+    return atomic_write(path, lambda p: p.write_text(text, encoding="utf-8"))
+
+
+write_text = atomic_text  # rig and controller files
 
 
 # ---------------------------------------------------------------------------------------------- rig files
-_RIG_UNITS = {"mass": "kg", "kyy": "N/m", "kiy": "N/A", "bias_current": "A", "amp_bandwidth": "Hz",
-              "eddy_bandwidth": "Hz", "sensor_bandwidth": "Hz", "substeps": "integration substeps per sample",
-              "sensor_noise": "m rms", "force_noise": "N rms", "mass_loading": "kg", "force_coupling_tau": "s",
-              "clearance": "m", "current_limit": "A", "dead_time": "s"}  # fmt: skip
-
-
-def rig_table(rig: Rig) -> dict[str, Any]:
-    """The fields of ``rig`` as a rig file writes them (``"none"`` for None)."""
-    return {f.name: "none" if getattr(rig, f.name) is None else getattr(rig, f.name) for f in fields(Rig)}
+_RIG_UNITS = {**{f.name: UNITS[f.name] for f in fields(Rig) if f.name in UNITS},
+              "substeps": "integration substeps per sample"}  # fmt: skip
 
 
 def save_rig(rig: Rig, path: str | os.PathLike[str], extra: Mapping[str, Mapping[str, Any]] | None = None) -> Path:
@@ -147,7 +177,8 @@ def save_rig(rig: Rig, path: str | os.PathLike[str], extra: Mapping[str, Mapping
     if file.suffix.lower() != ".toml":
         raise ValueError(f"path must end in .toml (a rig file), got {str(file)!r}")
     header = "# amb_fast rig file: Rig fields in SI units ('none': stage switched off); load with amb_fast.load_rig\n"
-    return write_text(file, header + to_toml({**rig_table(rig), **(extra or {})}, _RIG_UNITS))
+    table = {f.name: "none" if getattr(rig, f.name) is None else getattr(rig, f.name) for f in fields(Rig)}
+    return write_text(file, header + to_toml({**table, **(extra or {})}, _RIG_UNITS))
 
 
 def load_rig(path: str | os.PathLike[str]) -> Rig:

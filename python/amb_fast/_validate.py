@@ -23,6 +23,13 @@ def real(name: str, value: Any, unit: str, *, positive: bool = False) -> float:
     return float(value)
 
 
+def non_negative(name: str, value: Any, unit: str) -> float:
+    """A finite real number >= 0, returned as float."""
+    number = real(name, value, unit)
+    require(number >= 0, name, value, f">= 0 ({unit})")
+    return number
+
+
 def optional_positive(name: str, value: Any, unit: str) -> float | None:
     return None if value is None else real(name, value, unit, positive=True)
 

@@ -17,8 +17,7 @@ from ._params import PID, Rig
 
 def magnet_force(rig: Rig, y: float, i: float) -> float:
     """Differential magnet-pair force on the platform (N), MODEL.md section 4."""
-    i0 = rig.bias_current
-    g = i0 * rig.kiy / -rig.kyy
+    i0, g = rig.bias_current, rig.gap
     km = rig.kiy * g**2 / (4 * i0)
     return km * ((i0 - i) ** 2 / (g - y) ** 2 - (i0 + i) ** 2 / (g + y) ** 2)
 
@@ -29,10 +28,16 @@ def zoh(A: np.ndarray, B: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]
     return Phi, Gamma
 
 
-def _dead_time(rig: Rig, T: float) -> tuple[int, float]:
-    """Whole samples and the fraction left over (s) of the rig's dead time."""
+def _plant(rig: Rig, T: float) -> tuple[np.ndarray, np.ndarray, list[str], int, int, float]:
+    """The plant's A, B, states, the sensed state's index, and the dead time's whole samples and fraction (s)."""
+    A, B, states = plant_matrices(rig)
     whole = int(np.floor(rig.dead_time / T))
-    return whole, max(0.0, rig.dead_time - whole * T)
+    return A, B, states, states.index("ys") if "ys" in states else 0, whole, max(0.0, rig.dead_time - whole * T)
+
+
+def _pid_pole(pid: PID, T: float) -> float:
+    """The derivative filter's pole exp(-2 pi fd T), 0 without a filter."""
+    return float(np.exp(-2 * np.pi * pid.derivative_cutoff * T)) if pid.derivative_cutoff is not None else 0.0
 
 
 class _Law:
@@ -43,8 +48,7 @@ class _Law:
         self.pid = controller if isinstance(controller, PID) else None
         T = 1.0 / controller.fs
         if self.pid is not None:
-            cutoff = self.pid.derivative_cutoff
-            self.a = np.exp(-2 * np.pi * cutoff * T) if cutoff is not None else 0.0
+            self.a = _pid_pole(self.pid, T)
             self.integral = self.derivative = self.e_prev = 0.0
         else:
             self.A, self.B, self.C, self.D = state_space(controller)
@@ -74,16 +78,12 @@ def simulate(rig: Rig, pid: AnyController, force: np.ndarray) -> tuple[np.ndarra
     """
     force = np.asarray(force, dtype=float)
     T = 1.0 / pid.fs
-    A, B, states = plant_matrices(rig)
-    n = len(states)
-    whole, fraction = _dead_time(rig, T)
-    Phi, Gamma = zoh(A, B, T)
-    if fraction > 0:
-        early, late = zoh(A, B, fraction), zoh(A, B, T - fraction)
-    sensed = states.index("ys") if "ys" in states else 0
+    A, B, states, sensed, whole, fraction = _plant(rig, T)
+    pieces = (fraction, T - fraction) if fraction > 0 else (T,)  # the first of two still gets the previous command
+    steps = [zoh(A, B, h) for h in pieces]
     law = _Law(pid)
 
-    x = np.zeros(n)
+    x = np.zeros(len(states))
     previous = 0.0
     pending = deque([0.0] * (pid.delay + whole))
     displacement = np.empty(force.size)
@@ -94,16 +94,11 @@ def simulate(rig: Rig, pid: AnyController, force: np.ndarray) -> tuple[np.ndarra
         i_cmd = pending.popleft()
         displacement[k] = e
         current[k] = x[states.index("i")] if "i" in states else i_cmd
-        if rig.force_law == "linear" and fraction > 0:
-            x = early[0] @ x + early[1] @ np.array([f, previous])
-            x = late[0] @ x + late[1] @ np.array([f, i_cmd])
-        elif rig.force_law == "linear":
-            x = Phi @ x + Gamma @ np.array([f, i_cmd])
-        elif fraction > 0:
-            x = _rk4_sample(rig, A, B, states, x, f, previous, fraction)
-            x = _rk4_sample(rig, A, B, states, x, f, i_cmd, T - fraction)
-        else:
-            x = _rk4_sample(rig, A, B, states, x, f, i_cmd, T)
+        for h, (Phi, Gamma), u in zip(pieces, steps, (previous, i_cmd)[2 - len(pieces) :]):
+            if rig.force_law == "linear":
+                x = Phi @ x + Gamma @ np.array([f, u])
+            else:
+                x = _rk4_sample(rig, A, B, states, x, f, u, h)
         previous = i_cmd
     return displacement, current
 
@@ -135,12 +130,10 @@ def receptance(rig: Rig, pid: AnyController, freq: np.ndarray) -> np.ndarray:
     :func:`scipy.signal.cont2discrete` (with the dead time: whole samples as z^-m, the fraction as
     the two pieces of the sample) and the digital PID G(z) written out from MODEL.md."""
     T = 1.0 / pid.fs
-    A, B, states = plant_matrices(rig)
+    A, B, states, sensed, whole, fraction = _plant(rig, T)
     n = len(states)
-    sensed = states.index("ys") if "ys" in states else 0
     Phi, Gamma = zoh(A, B, T)
     z = np.exp(2j * np.pi * np.asarray(freq, dtype=float) * T)
-    whole, fraction = _dead_time(rig, T)
     if fraction > 0:  # the command reaches the plant as G0 u[k] + G1 u[k-1] (then the whole samples)
         late_Phi, late_Gamma = zoh(A, B, T - fraction)
         G0, G1 = late_Gamma[:, 1], late_Phi @ zoh(A, B, fraction)[1][:, 1]
@@ -151,7 +144,7 @@ def receptance(rig: Rig, pid: AnyController, freq: np.ndarray) -> np.ndarray:
          for zk in z]
     )  # (freq, 2)  # fmt: skip
     if isinstance(pid, PID):
-        a = np.exp(-2 * np.pi * pid.derivative_cutoff * T) if pid.derivative_cutoff is not None else 0.0
+        a = _pid_pole(pid, T)
         G = pid.kp + pid.ki * T / (1 - 1 / z) + pid.kd * (1 - a) * (1 - 1 / z) / (T * (1 - a / z))
     else:  # G(z) = C (zI - A)^-1 B + D of the controller's own state space
         Ac, Bc, Cc, Dc = state_space(pid)

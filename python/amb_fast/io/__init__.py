@@ -1,18 +1,6 @@
-"""Files in and out.
-
-- Readers for what rigs write: the :class:`Recording` and its entry points ``load_recording`` and
-  ``save_recording`` (``_recording``); one reader per format: CSV/TSV/``;`` dialects with quoted headers,
-  a units row and decimal commas, read in chunks keeping only the chosen columns (``_text``); MATLAB
-  v4-v7 (scipy) and v7.3 (HDF5, h5py), dSPACE ControlDesk/TRACE exports with several recordings
-  (``_mat``); NI TDMS (npTDMS, ``_tdms``). What they share (``_channels``): channels by name or index,
-  units scaled to SI or refused, fs from a time column, the choice among a file's recordings.
-- Writers (``_results``): estimates as CSV with a metadata header, the estimate's dataset described once,
-  xarray and pandas views, SHA-256 checksums checked on load.
-- NetCDF (``_netcdf``): estimates and sweeps written with h5netcdf alone (the file xarray writes from their
-  ``to_xarray`` Dataset, without importing xarray), xarray's writer kept as the reference; the reader, which
-  checks the file's SHA-256, the dataset's and HDF5's fletcher32.
-- The atomic-write helper (``_atomic``): a temporary file in the same directory, fsync, ``os.replace``.
-"""
+"""Files in and out: recordings (``_recording``, one reader per format in ``_text``, ``_mat``, ``_tdms``,
+what they share in ``_channels``), estimates and sweeps as CSV/NPZ (``_results``) and NetCDF (``_netcdf``)
+with SHA-256 checksums, all written atomically (``_atomic``)."""
 
 from __future__ import annotations
 

@@ -1,10 +1,6 @@
-"""What every reader of a recording shares: channel names and their units, a channel by name or index,
-the sampling frequency from ``fs`` or a time column, and the choice among a file's recordings.
-
-A channel is found by name (exact, then without its unit, then the last part of a dSPACE path) or by
-index; a unit in the name (``force [kN]``, ``x (mm)``, ``disp_um``) or in a units row is scaled to SI,
-and a unit that is not a force (for the force) or a length (for the displacement) is refused.
-"""
+"""What every reader of a recording shares: a channel by name (exact, then without case, unit or dSPACE path)
+or index, its unit (in the name or a units row) scaled to SI or refused, fs from ``fs`` or a time column, and
+the choice among a file's recordings."""
 
 from __future__ import annotations
 
@@ -39,38 +35,25 @@ def split_unit(name: str) -> tuple[str, str | None]:
     return name, None
 
 
-def unit_of(name: str, unit: str, path: Path) -> tuple[str | None, float]:
-    """(quantity, factor to SI) of a channel's unit, compared without case except for mega: ``MN`` is a
-    meganewton (1e6 N), not mN; in a name written all in capitals (``FORCE [MN]``) it could be either and is
-    refused."""
-    if unit == "MN":
-        if name.upper() == name:
-            raise ValueError(f"{path.name}: the channel {name!r} has unit 'MN', written in capitals: meganewton or "
-                             "millinewton? Write the unit as 'mN' or 'kN' (or rescale the column to N)")  # fmt: skip
-        return "force", 1e6
-    return UNITS.get(unit.lower(), (None, 1.0))
+_QUANTITIES = {"force": ("force", "N, kN, mN, MN"), "displacement": ("length", "m, mm, um, nm"),
+               "time": ("time", "s, ms, us")}  # fmt: skip
 
 
 def _scale(name: str, quantity: str, path: Path) -> float:
+    """The factor to SI of a channel's unit (1 without one), compared without case except for mega: ``MN`` is
+    a meganewton, not mN, and refused in a name all in capitals (``FORCE [MN]``). Another quantity's unit is
+    refused."""
     unit = split_unit(name)[1]
-    if unit is None or unit == "":
+    if not unit:
         return 1.0
-    want = {"force": "force", "displacement": "length", "time": "time"}[quantity]
-    kind, factor = unit_of(name, unit, path)
-    if kind != want:
-        units = {"force": "N, kN, mN, MN", "length": "m, mm, um, nm", "time": "s, ms, us"}[want]
+    if unit == "MN" and name.upper() == name:
+        raise ValueError(f"{path.name}: the channel {name!r} has unit 'MN', written in capitals: meganewton or "
+                         "millinewton? Write the unit as 'mN' or 'kN' (or rescale the column to N)")  # fmt: skip
+    kind, factor = ("force", 1e6) if unit == "MN" else UNITS.get(unit.lower(), (None, 1.0))
+    if kind != _QUANTITIES[quantity][0]:
         raise ValueError(f"{path.name}: the {quantity} channel {name!r} has unit {unit!r}; amb_fast needs "
-                         f"one of {units} (scaled to SI), or rescale the column")  # fmt: skip
+                         f"one of {_QUANTITIES[quantity][1]} (scaled to SI), or rescale the column")  # fmt: skip
     return factor
-
-
-def scaled(name: str, quantity: str) -> str:
-    """A channel's name for ``Recording.source``, with the scaling its unit implied: ``"'x [um]' (um -> m)"``."""
-    unit = split_unit(name)[1]
-    si = {"force": "N", "displacement": "m", "time": "s"}[quantity]
-    if not unit or unit == si or (1e6 if unit == "MN" else UNITS.get(unit.lower(), ("", 1.0))[1]) == 1.0:
-        return repr(name)
-    return f"{name!r} ({unit} -> {si})"
 
 
 def _index(names: list[str], key: str | int, role: str, path: Path) -> int:
@@ -118,12 +101,10 @@ def _time_index(names: list[str], time: str | int | None, path: Path) -> int | N
     time column (``Time [s]``, ``TIME``, ``t [ms]``, ``Zeit``, LabVIEW's ``X_Value``, ...). None if absent."""
     if time is None:
         return None
-    if isinstance(time, (int, np.integer)) and not isinstance(time, bool):
-        return _index(names, int(time), "time", path)
     try:
-        return _find(names, str(time), "time", path)
+        return _index(names, time, "time", path)
     except ValueError:
-        if str(time) != "time":
+        if not isinstance(time, str) or time != "time":
             raise
     hits = [i for i, n in enumerate(names) if split_unit(n)[0].strip().casefold() in TIME_NAMES]
     if len(hits) > 1:  # two columns that could be the clock: guessing one could give a wrong fs
@@ -149,13 +130,6 @@ def _agree(
     return float(given if given is not None else found)  # type: ignore[arg-type]
 
 
-def fs_origin(found: float | None, where: str, path: Path, recording: str = "") -> str:
-    """Where a recording's fs came from, for messages: ``"the time column 'Time [s]' of rig.csv"``, ``"fs="``."""
-    if found is None:
-        return "fs= (given)"
-    return f"the {where} of {path.name}" + (f" recording {recording!r}" if recording else "")
-
-
 BLOCK = 1 << 13  # samples per block of the time column's checks: their temporaries stay small
 
 
@@ -166,16 +140,14 @@ def _quantum(t: np.ndarray) -> float:
     clocks such as Unix timestamps carry it: 2.4e-7 s at 1.7e9 s)."""
     t0, spacing = float(t[0]), float(np.spacing(max(abs(float(t[0])), abs(float(t[-1])))))
     for digits in range(0, 10):
-        ok = True
         tolerance = 1e-6 + 4.0 * spacing * 10.0**digits
         if tolerance > 1e-2:  # digits finer than the floats resolve
             return 0.0
         for a in range(0, t.size, BLOCK):
             x = (t[a : a + BLOCK] - t0) * 10.0**digits
             if float(np.max(np.abs(x))) >= 1e15 or float(np.max(np.abs(x - np.rint(x)))) >= tolerance:
-                ok = False
                 break
-        if ok:
+        else:
             return 10.0**-digits
     return 0.0
 
@@ -237,7 +209,10 @@ def _file_fs(channels: dict[str, np.ndarray], time: str | int | None, path: Path
     names = list(channels)
     if "fs" in channels:
         where = "channels' wf_increment" if path.suffix.lower() == ".tdms" else "'fs' variable"  # TDMS: the waveform's
-        return float(np.ravel(channels["fs"])[0]), where
+        value = np.ravel(channels["fs"])
+        if value.size != 1 or not value[0] > 0 or not np.isfinite(value[0]):  # never a guess among several
+            raise ValueError(f"{path.name}: its {where} must be one finite number > 0 (Hz), got {value.tolist()}")
+        return float(value[0]), where
     index = _time_index(names, time, path)
     if index is None:
         return None, ""

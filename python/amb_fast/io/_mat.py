@@ -9,15 +9,11 @@ from pathlib import Path
 import numpy as np
 
 
-def _is_hdf5(path: Path) -> bool:
-    with open(path, "rb") as handle:
-        head = handle.read(520)
-    return head[512:520] == b"\x89HDF\r\n\x1a\n" or head[:8] == b"\x89HDF\r\n\x1a\n"
-
-
 def _read_mat(path: Path) -> dict[str, dict[str, np.ndarray]]:
     """Recordings of a ``.mat`` file: ``""`` for numeric top-level variables, one per dSPACE export struct."""
-    if _is_hdf5(path):
+    with open(path, "rb") as handle:
+        head = handle.read(520)
+    if b"\x89HDF\r\n\x1a\n" in (head[512:520], head[:8]):  # v7.3: HDF5 behind a 512-byte header
         return _read_mat73(path)
     from scipy.io import loadmat
 
@@ -41,10 +37,8 @@ def _read_mat(path: Path) -> dict[str, dict[str, np.ndarray]]:
 
 
 def _dspace(time: np.ndarray, channels: Sequence[tuple[str, object]]) -> dict[str, np.ndarray]:
-    out = {"time": np.asarray(time, dtype=float).ravel()}
-    for name, data in channels:
-        out[name] = np.asarray(data, dtype=float).ravel()
-    return out
+    """A dSPACE export's channels: ``time`` (its X.Data), then each Y(k) by name."""
+    return {"time": np.ravel(np.asarray(time, dtype=float)), **{n: np.ravel(np.asarray(d, float)) for n, d in channels}}
 
 
 def _read_mat73(path: Path) -> dict[str, dict[str, np.ndarray]]:
@@ -59,33 +53,19 @@ def _read_mat73(path: Path) -> dict[str, dict[str, np.ndarray]]:
     except OSError as error:
         raise ValueError(f"{path.name} is not a readable MATLAB v7.3 (HDF5) file: {error}") from None
     with f:
-
-        def char(ds: h5py.Dataset) -> str:
-            return "".join(chr(c) for c in np.ravel(ds[()]))
-
-        def deref(ref: h5py.Reference) -> h5py.Dataset:
-            return f[ref]
-
         for key, item in f.items():
             if key.startswith("#"):
                 continue
             cls = item.attrs.get("MATLAB_class", b"")
             cls = cls.decode() if isinstance(cls, bytes) else str(cls)
             if isinstance(item, h5py.Group) and cls == "struct" and "X" in item and "Y" in item:
-                x, y = item["X"], item["Y"]
-                time = _h5_field(f, x, "Data", 0)
-                names_ds, data_ds = y["Name"], y["Data"]
-                refs_n, refs_d = np.ravel(names_ds[()]), np.ravel(data_ds[()])
-                chans = [(char(deref(rn)), np.ravel(deref(rd)[()])) for rn, rd in zip(refs_n, refs_d)]
-                groups[key] = _dspace(time, chans)
+                time = item["X"]["Data"]
+                if time.dtype.kind == "O":  # a struct array: a reference per element
+                    time = f[np.ravel(time[()])[0]]
+                names, data = (np.ravel(item["Y"][field][()]) for field in ("Name", "Data"))
+                channels = [("".join(chr(c) for c in np.ravel(f[n][()])), f[d][()]) for n, d in zip(names, data)]
+                groups[key] = _dspace(time[()], channels)
             elif isinstance(item, h5py.Dataset) and item.dtype.kind in "iuf" and cls not in ("char", "cell"):
                 value = np.asarray(item[()], dtype=float).T  # MATLAB is column-major
                 groups[""][key] = np.ravel(value) if min(value.shape, default=1) <= 1 else value
     return groups
-
-
-def _h5_field(f, group, field: str, index: int) -> np.ndarray:  # noqa: ANN001
-    node = group[field]
-    if node.dtype.kind == "O":  # a struct array: references per element
-        return np.ravel(f[np.ravel(node[()])[index]][()]).astype(float)
-    return np.ravel(node[()]).astype(float)

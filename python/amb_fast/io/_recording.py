@@ -1,10 +1,6 @@
-"""Recordings of a rig: CSV/TSV dialects, MATLAB v4-v7 and v7.3 (HDF5), dSPACE exports, NI TDMS.
-
-This module: the :class:`Recording`, :func:`load_recording` (the suffix chooses the reader) and
-:func:`save_recording`. The readers are in ``_text``, ``_mat`` and ``_tdms``: the MATLAB and TDMS readers
-return *recordings*, a name (``""`` for a file's top level) mapped to its channels; the text reader keeps
-only the chosen columns. What they share (channels by name or index, units, fs) is in ``_channels``.
-"""
+"""The :class:`Recording`, :func:`load_recording` (the suffix chooses the reader: ``_text``, ``_mat``, ``_tdms``;
+the MATLAB and TDMS readers return recordings, a name, ``""`` for the top level, mapped to channels) and
+:func:`save_recording`."""
 
 from __future__ import annotations
 
@@ -17,7 +13,7 @@ from numpy.typing import ArrayLike
 from .._equality import ArrayRecord
 from .._validate import real, require, series
 from ._atomic import atomic_write
-from ._channels import _agree, _channel, _choose_recording, _file_fs, _scale, fs_origin, scaled
+from ._channels import _agree, _channel, _choose_recording, _file_fs, _scale, split_unit
 from ._mat import _read_mat
 from ._tdms import _read_tdms
 from ._text import _load_text
@@ -68,6 +64,9 @@ def save_recording(
 
     path = Path(path)
     force, displacement = series("force", force), series("displacement", displacement)
+    require(
+        displacement.size == force.size, "displacement samples", displacement.size, f"as many as force's ({force.size})"
+    )
     fs = real("fs", fs, "Hz", positive=True)
     suffix = path.suffix.lower()
     require(suffix in (".csv", ".mat"), "path", str(path), "a file name ending in .csv or .mat")
@@ -148,25 +147,29 @@ def load_recording(
     require(suffix in SUFFIXES, "path", str(path), f"a recording ending in {', '.join(SUFFIXES)}")
     if fs is not None:
         fs = real("fs", fs, "Hz", positive=True)
-    if suffix == ".mat":
-        groups = _read_mat(path)
-    elif suffix == ".tdms":
-        groups = _read_tdms(path)
+    name = ""
+    if suffix in (".mat", ".tdms"):
+        name, channels = _choose_recording(_read_mat(path) if suffix == ".mat" else _read_tdms(path), path, recording,
+                                           (force, displacement))  # fmt: skip
+        f_name, f_values = _channel(channels, force, "force", path)
+        y_name, y_values = _channel(channels, displacement, "displacement", path)
+        sizes = (np.size(f_values), np.size(y_values))
+        if sizes[0] != sizes[1] or sizes[0] < 2:  # a scalar (such as 'fs') chosen by index, or two recordings'
+            raise ValueError(f"{path.name}: the force {f_name!r} has {sizes[0]} samples and the displacement "
+                             f"{y_name!r} {sizes[1]}: choose two channels of the same recording, of at least 2 "
+                             "samples")  # fmt: skip
+        names, (found, origin) = list(channels), _file_fs(channels, time, path)
+        f_values, y_values = np.array(f_values, dtype=float), np.array(y_values, dtype=float)  # scaled in place
     else:
-        return Recording(*_load_text(path, force, displacement, fs, time))
-    name, channels = _choose_recording(groups, path, recording, (force, displacement))
-    f_name, f_values = _channel(channels, force, "force", path)
-    y_name, y_values = _channel(channels, displacement, "displacement", path)
-    sizes = (np.size(f_values), np.size(y_values))
-    if sizes[0] != sizes[1] or sizes[0] < 2:  # a scalar (such as 'fs') chosen by index, or two recordings' channels
-        raise ValueError(f"{path.name}: the force {f_name!r} has {sizes[0]} samples and the displacement {y_name!r} "
-                         f"{sizes[1]}: choose two channels of the same recording, of at least 2 samples")  # fmt: skip
-    f_values = f_values * _scale(f_name, "force", path)
-    y_values = y_values * _scale(y_name, "displacement", path)
-    found, origin = _file_fs(channels, time, path)
-    fs = _agree(fs, found, path, origin, list(channels))
-    where = f"{path.name}" + (f" recording {name!r}" if name else "")
-    clock = f"; fs {fs:.10g} Hz from its {origin}" if found is not None else f"; fs {fs:.10g} Hz given"
-    return Recording(series("force", f_values), series("displacement", y_values), fs,
-                     f"{where}: force {scaled(f_name, 'force')}, displacement {scaled(y_name, 'displacement')}{clock}",
-                     fs_origin(found, origin, path, name))  # fmt: skip
+        names, f_name, f_values, y_name, y_values, found, origin = _load_text(path, force, displacement, time)
+    described = []
+    for values, channel, role, si in ((f_values, f_name, "force", "N"), (y_values, y_name, "displacement", "m")):
+        scale = _scale(channel, role, path)
+        if scale != 1.0:
+            values *= scale
+        described.append(f"{role} {channel!r}" + (f" ({split_unit(channel)[1]} -> {si})" if scale != 1.0 else ""))
+    fs = _agree(fs, found, path, origin, names)
+    where = path.name + (f" recording {name!r}" if name else "")
+    source = f"{where}: {', '.join(described)}; fs {fs:.10g} Hz " + ("given" if found is None else f"from its {origin}")
+    fs_from = "fs= (given)" if found is None else f"the {origin} of {where}"
+    return Recording(series("force", f_values), series("displacement", y_values), fs, source, fs_from)

@@ -7,6 +7,7 @@ chosen columns (pandas' C parser when installed, numpy's ``loadtxt`` otherwise).
 from __future__ import annotations
 
 import csv
+import itertools
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -15,13 +16,14 @@ from pathlib import Path
 import numpy as np
 
 from .._validate import require
-from ._channels import UNITS, _agree, _index, _scale, _time_index, fs_from_time, fs_origin, scaled, split_unit
+from ._channels import UNITS, _index, _scale, _time_index, fs_from_time, split_unit
 
 CHUNK_BYTES = 1 << 16  # text per chunk when reading: bounds the memory beyond the two channels
 # Units a DAQ writes in a units row that amb_fast does not scale: recognised so the row is not taken for the
 # header (the header row above it would be lost), and a channel in one of them is refused naming its unit.
 OTHER_UNITS = frozenset({"v", "mv", "a", "ma", "g", "lbf", "in", "mil", "mils", "hz", "rpm", "pa", "bar", "%", "-",
                          "°c", "degc", "k", "w", "rad", "deg", "m/s", "m/s^2", "m/s2"})  # fmt: skip
+_UNIT_WORDS = OTHER_UNITS | set(UNITS)
 WIDE = 16  # columns beyond which text is parsed by numpy (smaller buffers) even with pandas installed
 
 
@@ -47,7 +49,7 @@ _RATE_LINE = re.compile(
     re.IGNORECASE,
 )
 _RATE_UNITS = {"hz": 1.0, "khz": 1e3, "s/s": 1.0, "sa/s": 1.0, "samples/s": 1.0, "ks/s": 1e3, "/s": 1.0, "1/s": 1.0}
-_STEP_UNITS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6}
+_STEP_UNITS = {unit: factor for unit, (quantity, factor) in UNITS.items() if quantity == "time"}
 
 
 def stated_rate(lines: list[str], path: Path) -> tuple[float, str] | None:
@@ -83,18 +85,12 @@ def _numeric(field: str, decimal_comma: bool) -> bool:
     return True
 
 
-def _split(line: str, delimiter: str | None) -> list[str]:
-    if delimiter is None:
-        return line.split()
-    return next(csv.reader([line], delimiter=delimiter, quotechar='"', skipinitialspace=True))
-
-
 def _fields(line: str, delimiter: str | None) -> list[str]:
     """A line's fields; a delimiter ending every line (some DAQs write one) leaves no empty last field."""
-    fields = _split(line, delimiter)
-    if delimiter is not None and len(fields) > 1 and not fields[-1].strip():
-        fields = fields[:-1]
-    return fields
+    if delimiter is None:
+        return line.split()
+    fields = next(csv.reader([line], delimiter=delimiter, quotechar='"', skipinitialspace=True))
+    return fields[:-1] if len(fields) > 1 and not fields[-1].strip() else fields
 
 
 def _data_start(rows: list[list[str]], decimal_comma: bool) -> int | None:
@@ -120,18 +116,12 @@ def sniff(path: Path) -> _Dialect:
     metadata (LabVIEW's ``***End_of_Header***`` blocks, a DAQ's ``key: value`` preamble) and skipped. A file
     without a header row has its columns named ``column 0``, ``column 1``, ... (choose them by index)."""
     with open(path, encoding="utf-8-sig", errors="replace", newline="") as handle:
-        lines = []
-        for line in handle:
-            lines.append(line.rstrip("\r\n"))
-            if len(lines) >= 256:
-                break
+        lines = [line.rstrip("\r\n") for line in itertools.islice(handle, 256)]
     kept = [j for j, line in enumerate(lines) if line.strip() and not line.lstrip().startswith(("#", "%"))]
     if not kept:
         raise ValueError(f"{path.name} has no rows of numbers")
     sample = "\n".join(lines[j] for j in kept[-16:])
-    candidates: list[str | None] = [d for d in ("\t", ";", ",") if d in sample]
-    candidates.append(None)
-    for delimiter in candidates:
+    for delimiter in [*(d for d in ("\t", ";", ",") if d in sample), None]:
         rows = [_fields(lines[j], delimiter) for j in kept]
         for decimal_comma in (False, True):
             if decimal_comma and delimiter == ",":
@@ -143,9 +133,7 @@ def sniff(path: Path) -> _Dialect:
             # The header has the data's fields, or one more whose column is empty (LabVIEW's "Comment").
             before = [r[:width] for r in rows[max(0, start - 2) : start] if len(r) in (width, width + 1)]
             units_row = len(before) == 2 and all(
-                u.strip().strip("[]()").lower() in UNITS or u.strip().strip("[]()").lower() in OTHER_UNITS
-                for u in before[1]
-                if u.strip()
+                u.strip().strip("[]()").lower() in _UNIT_WORDS for u in before[1] if u.strip()
             )
             above = ""
             if units_row:  # a header, then a units row
@@ -169,9 +157,10 @@ def sniff(path: Path) -> _Dialect:
 
 
 def _load_text(
-    path: Path, force: str | int, displacement: str | int, fs: float | None, time: str | int | None
-) -> tuple[np.ndarray, np.ndarray, float, str, str]:
-    """Force (N), displacement (m), fs (Hz), the source and fs's origin of a text recording: its Recording's fields."""
+    path: Path, force: str | int, displacement: str | int, time: str | int | None
+) -> tuple[list[str], str, np.ndarray, str, np.ndarray, float | None, str]:
+    """A text recording's column names, the force's and the displacement's name and values (in their units),
+    and fs (Hz) from its time column or metadata with where it came from (None, "" without either)."""
     dialect = sniff(path)
     names = dialect.names
     headerless = names[0] == "column 0"
@@ -186,7 +175,6 @@ def _load_text(
                              "if any, time=0; on the command line --force 1 --displacement 2 --time 0)") \
                 from error  # fmt: skip
         raise
-    f_name, y_name = names[columns[0]], names[columns[1]]
     t_index = None if headerless and not isinstance(time, int) else _time_index(names, time, path)
     use = columns + ([t_index] if t_index is not None else [])
     count = _count_rows(path, dialect.skip)
@@ -210,18 +198,7 @@ def _load_text(
                              "choose")  # fmt: skip
         if found is None:
             found, origin = stated, f"metadata line {line!r}"
-    fs = _agree(fs, found, path, origin, names)
-    force_values = out[0]
-    displacement_values = out[1]
-    scale_f, scale_y = _scale(f_name, "force", path), _scale(y_name, "displacement", path)
-    if scale_f != 1.0:
-        force_values *= scale_f
-    if scale_y != 1.0:
-        displacement_values *= scale_y
-    clock = f"; fs {fs:.10g} Hz from its {origin}" if found is not None else f"; fs {fs:.10g} Hz given"
-    return (np.ascontiguousarray(force_values), np.ascontiguousarray(displacement_values), fs,
-            f"{path.name}: force {scaled(f_name, 'force')}, displacement {scaled(y_name, 'displacement')}{clock}",
-            fs_origin(found, origin, path))  # fmt: skip
+    return names, names[columns[0]], out[0], names[columns[1]], out[1], found, origin
 
 
 def _chunks(path: Path, dialect: _Dialect, use: list[int]) -> Iterator[np.ndarray]:
@@ -235,52 +212,37 @@ def _chunks(path: Path, dialect: _Dialect, use: list[int]) -> Iterator[np.ndarra
         import pandas as pd
     except ImportError:
         pd = None
-    if pd is not None and not dialect.comment_percent and len(dialect.names) <= WIDE:
-        rows_per_chunk = max(256, CHUNK_BYTES // dialect.line_bytes)
-        reader = pd.read_csv(
-            path, sep=dialect.delimiter or r"\s+", header=None, skiprows=dialect.skip, usecols=sorted(set(use)),
-            chunksize=rows_per_chunk, dtype=np.float64, decimal="," if dialect.decimal_comma else ".",
-            comment="#", quotechar='"', skipinitialspace=True, encoding="utf-8-sig", engine="c",
-        )  # fmt: skip
-        rows = 0
-        try:
-            with reader:
+    rows = 0
+    try:
+        if pd is not None and not dialect.comment_percent and len(dialect.names) <= WIDE:
+            with pd.read_csv(
+                path, sep=dialect.delimiter or r"\s+", header=None, skiprows=dialect.skip, usecols=sorted(set(use)),
+                chunksize=max(256, CHUNK_BYTES // dialect.line_bytes), dtype=np.float64,
+                decimal="," if dialect.decimal_comma else ".", comment="#", quotechar='"', skipinitialspace=True,
+                encoding="utf-8-sig", engine="c",
+            ) as reader:  # fmt: skip
                 for frame in reader:
                     yield frame[use].to_numpy(dtype=np.float64)
                     rows += len(frame)
-        except (ValueError, TypeError) as error:
-            raise ValueError(f"{path.name}: a row after line {dialect.skip + rows} is not numeric ({error})") from None
-        return
-    rows = 0
-    with open(path, encoding="utf-8-sig", errors="replace", newline="") as handle:
-        for _ in range(dialect.skip):
-            handle.readline()
-        while True:
-            block = handle.readlines(CHUNK_BYTES)
-            if not block:
-                return
-            if dialect.decimal_comma:
-                block = [line.replace(",", ".") for line in block]
-            if any('"' in line for line in block[:1]) or '"' in block[-1]:
-                block = [line.replace('"', "") for line in block]
-            try:
+            return
+        with open(path, encoding="utf-8-sig", errors="replace", newline="") as handle:
+            for _ in range(dialect.skip):
+                handle.readline()
+            while block := handle.readlines(CHUNK_BYTES):
+                if dialect.decimal_comma:
+                    block = [line.replace(",", ".") for line in block]
+                if '"' in block[0] or '"' in block[-1]:
+                    block = [line.replace('"', "") for line in block]
                 chunk = np.loadtxt(block, delimiter=dialect.delimiter, usecols=use, ndmin=2, comments=("#", "%"),
                                    dtype=np.float64)  # fmt: skip
-            except ValueError as error:
-                raise ValueError(f"{path.name}: a row after line {dialect.skip + rows} is not numeric ({error})") \
-                    from None  # fmt: skip
-            rows += chunk.shape[0]
-            yield chunk
+                yield chunk
+                rows += chunk.shape[0]
+    except (ValueError, TypeError) as error:
+        raise ValueError(f"{path.name}: a row after line {dialect.skip + rows} is not numeric ({error})") from None
 
 
 def _count_rows(path: Path, skip: int) -> int:
     """Data rows after ``skip`` lines (blank and comment lines excluded), without holding the file."""
-    count = 0
     with open(path, "rb") as handle:
-        for index, line in enumerate(handle):
-            if index < skip:
-                continue
-            stripped = line.strip()
-            if stripped and not stripped.startswith((b"#", b"%")):
-                count += 1
-    return count
+        rows = (line.strip() for line in itertools.islice(handle, skip, None))
+        return sum(1 for row in rows if row and not row.startswith((b"#", b"%")))
