@@ -33,7 +33,7 @@ from ._model import (
     sensitivity,
     stability_margin,
 )
-from ._rotor import RigidRotor, RotorRig
+from ._rotor import RigidRotor, RotorRig, linear_chains
 from ._sensitivity import SensitivityMeasurement, identify_sensitivity, measure_sensitivity
 from ._sweep import SweepResultN, point_model, sweep
 from ._unbalance import UnbalanceResponse, unbalance_response
@@ -50,6 +50,7 @@ __all__ = [
     "UnbalanceResponse",
     "campbell",
     "hadamard_signs",
+    "linear_chains",
     "identify",
     "identify_sensitivity",
     "measure_sensitivity",
