@@ -17,6 +17,7 @@ import sys
 from .._dispatch import register
 from .._ross import coefficient_arrays, to_ross
 from ..plots import plot_coefficients2
+from ..system import ControllerMatrix
 from ._command import add_two_axis_options, run_two_axis, save_estimate2, summary2
 from ._experiment import (
     SIGNS,
@@ -31,7 +32,6 @@ from ._experiment import (
     sweep,
 )
 from ._model import (
-    ControllerMatrix,
     StabilityMargin2,
     closed_loop,
     closed_loop_poles,

@@ -16,12 +16,10 @@ import numpy as np
 from .. import system
 from .._linear import StabilityMargin
 from .._validate import require
-from ..system import ControllerMatrix, ControllerSpec, LoopModel
+from ..system import ControllerMatrix, ControllerSpec
 from ._rig import TwoAxisRig
 
 F = TypeVar("F", bound=Callable[..., Any])
-
-__all__ = ["ControllerMatrix", "ControllerSpec", "LoopModel"]
 
 
 def two_axes(function: F) -> F:
