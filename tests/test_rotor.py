@@ -308,3 +308,17 @@ def test_campbell_batched_loops_are_the_loop_models() -> None:
         for M, W in zip(stack, speeds):
             expected = _model.loop_model(rig.at_speed(W), spec).M
             np.testing.assert_allclose(M, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
+
+
+def test_a_rotor_file_reads_as_toml_or_json(tmp_path) -> None:  # noqa: ANN001
+    """load_rotor reads a file as the package's other files (read_table): the same tables in JSON give the same
+    rig, and every error names the file (issue 26: the rotor file's own reader is gone)."""
+    toml, json = tmp_path / "rotor.toml", tmp_path / "rotor.json"
+    toml.write_text("[rotor]\nmass = 12.0\nprocess = [[0.1, 3e3, -3e3, 0.0, 0.0]]\n[controller]\nkd = 12.0\n")
+    json.write_text('{"rotor": {"mass": 12.0, "process": [[0.1, 3e3, -3e3, 0.0, 0.0]]}, "controller": {"kd": 12.0}}')
+    rig, pid = af.system.load_rotor(toml)
+    assert (rig, pid) == af.system.load_rotor(json)
+    assert rig.rotor.process == ((0.1, 3e3, -3e3, 0.0, 0.0),) and rig.rotor.mass == 12.0 and pid.kd == 12.0
+    assert rig.rotor.transverse_inertia == af.RotorRig.example().rotor.transverse_inertia
+    with pytest.raises(ValueError, match=r"rotor file '.*rotor\.txt': path must end in \.toml or \.json"):
+        af.system.load_rotor(tmp_path / "rotor.txt")

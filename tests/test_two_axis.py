@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import amb_fast as af
+import two_axis_reference as reference
 from amb_fast import two_axis as ta
-from amb_fast.two_axis import reference
 
 
 def worst(actual: np.ndarray, expected: np.ndarray) -> float:

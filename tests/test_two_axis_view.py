@@ -31,6 +31,26 @@ def test_two_axis_results_are_the_n_axis_ones() -> None:
         ta.run_experiment(af.Rig.paper(), PID, SPHS)
 
 
+def test_two_axis_functions_are_the_n_axis_ones_behind_one_check() -> None:
+    """No second implementation (issue 26): each two-axis function is the N-axis one behind the TwoAxisRig check,
+    and the recordings of two experiments are read by system.identify (its checks and warning category)."""
+    for name in ("predict", "sensitivity", "closed_loop", "closed_loop_poles", "effective_coefficients", "loop_model",
+                 "simulate", "run_experiment", "sweep"):  # fmt: skip
+        assert getattr(ta, name).__wrapped__ is getattr(system, name)
+    assert ta.point_model2.__wrapped__ is system.point_model
+    axis = replace(QUIET, force_coupling_tau=None)  # DC-coupled transducers: settled within the skipped periods
+    rig = ta.TwoAxisRig(x=axis, y=axis, kxy=1e3, kyx=-1e3)
+    trace = [ta.simulate(rig, PID, np.tile(np.outer(SPHS.samples, s), (22, 1))) for s in ta.SIGNS]
+    keep = 21 * SPHS.period_samples + 7  # 7 samples past the last whole period of each experiment
+    forces, displacements = [t.force[:keep] for t in trace], [t.displacement[:keep] for t in trace]
+    with pytest.warns(af.IdentificationWarning, match="dropped 14 samples"):
+        read = ta.identify(forces, displacements, fs=SPHS.fs, f0=SPHS.f0, mass=rig.mass, settle_periods=19)
+    assert read.freq.size == SPHS.freq.size and read.axes == ("x", "y")
+    with pytest.raises(ValueError, match=r"force shape must be recordings of N experiments, \(N, samples, N\), for N "
+                       r"in \[2, 4\], got \(3, 10, 3\)"):  # fmt: skip
+        af.identify(np.zeros((3, 10, 3)), np.zeros((3, 10, 3)), fs=4000.0, f0=20.0, mass=1.0)
+
+
 def test_paths_of_a_two_axis_sweep() -> None:
     """``x.<field>`` and ``x_<field>`` name the same axis field; a rig field (sensor_angle) is a path; a gain
     on a diagonal that is not a PID is refused, not silently left as it was."""

@@ -100,5 +100,5 @@ def test_unbalance_in_simulate_bad_input_names_the_value() -> None:
     unstable = replace(rig, rotor=replace(rig.rotor, process=((0.0, 3e5, -3e5, 0.0, 0.0),)))
     with pytest.raises(af.UnstableLoopError, match="the closed loop at speed 900 rad/s is unstable"):
         af.simulate(unstable, PID, force, unbalance=UNBALANCE)
-    with pytest.raises(TypeError, match="unexpected keyword argument 'unbalance'"):  # a platform has no spin
+    with pytest.raises(ValueError, match=r"rig must be a RotorRig \(an unbalance needs a rotor\), got 'TwoAxisRig'"):
         af.simulate(af.TwoAxisRig(af.Rig.paper()), af.PID.paper(), np.zeros((10, 2)), unbalance=UNBALANCE)

@@ -1,7 +1,7 @@
 """One API for any number of axes: a function given a rig of N axes runs that rig's implementation.
 
-The one-axis functions are decorated here; the packages of rigs with more axes register their rig
-types and the namespace that holds their implementations under the same names (:func:`register`), so
+The one-axis functions are decorated here; each structure's package registers its rig type and the
+namespace that holds its N-axis functions under the same names (:func:`register`), so
 ``af.predict(rig, ...)`` works whatever the rig, and this lower layer never imports a higher one: a rig
 of a registered type exists only once its package has been imported.
 """
@@ -15,20 +15,19 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from ._validate import require
+
 F = TypeVar("F", bound=Callable[..., Any])
 
 _SYSTEMS: dict[type, Any] = {}
-_RECORDINGS: dict[int, Callable[..., Any]] = {}
+_RECORDINGS: dict[int, Any] = {}  # namespaces by the number of axes
 
 
-def register(rig_type: type, namespace: Any) -> None:
-    """Route the decorated functions given a ``rig_type`` to ``namespace``'s functions of the same names."""
+def register(rig_type: type, namespace: Any, axes: int) -> None:
+    """Route the decorated functions given a ``rig_type`` to ``namespace``'s functions of the same names, and
+    :func:`identify` given the recordings of ``axes`` experiments, shape (axes, samples, axes), to its ``identify``."""
     _SYSTEMS[rig_type] = namespace
-
-
-def register_recordings(axes: int, identify: Callable[..., Any]) -> None:
-    """Route :func:`identify` given recordings of shape (axes, samples, axes) (experiment, sample, axis)."""
-    _RECORDINGS[axes] = identify
+    _RECORDINGS[axes] = namespace
 
 
 def _note(doc: str | None, sentence: str) -> str | None:
@@ -71,11 +70,9 @@ def recordings_aware(function: F) -> F:
     def wrapper(force: Any, displacement: Any, *args: Any, **kwargs: Any) -> Any:
         shape = np.shape(force)
         if len(shape) == 3:
-            handler = _RECORDINGS.get(shape[0])
-            if handler is None:
-                raise ValueError(f"force shape {shape}: recordings of N experiments, (N, samples, N), are read for "
-                                 f"N in {sorted(_RECORDINGS)} (import amb_fast.two_axis for two axes)")  # fmt: skip
-            return handler(force, displacement, *args, **kwargs)
+            require(shape[0] in _RECORDINGS, "force shape", shape,
+                    f"recordings of N experiments, (N, samples, N), for N in {sorted(_RECORDINGS)}")  # fmt: skip
+            return _RECORDINGS[shape[0]].identify(force, displacement, *args, **kwargs)
         return function(force, displacement, *args, **kwargs)
 
     wrapper.__doc__ = _note(

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import sys
 
-from .._dispatch import register, register_recordings
+from .._dispatch import register
 from .._mechanics import Mechanics
 from ._campbell import Campbell, campbell
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
@@ -33,7 +33,7 @@ from ._model import (
     sensitivity,
     stability_margin,
 )
-from ._rotor import RigidRotor, RotorRig
+from ._rotor import RigidRotor, RotorRig, linear_chains
 from ._sensitivity import SensitivityMeasurement, identify_sensitivity, measure_sensitivity
 from ._sweep import SweepResultN, point_model, sweep
 from ._unbalance import UnbalanceResponse, unbalance_response
@@ -50,6 +50,7 @@ __all__ = [
     "UnbalanceResponse",
     "campbell",
     "hadamard_signs",
+    "linear_chains",
     "identify",
     "identify_sensitivity",
     "measure_sensitivity",
@@ -79,7 +80,6 @@ __all__ = [
     "unbalance_response",
 ]
 
-# af.predict(rotor_rig, ...) and its siblings run the N-axis functions of this namespace.
-register(RotorRig, sys.modules[__name__])
-# af.identify(force, displacement, rig=...) of a rotor's four experiments, (4, samples, 4), runs identify.
-register_recordings(4, identify)
+# af.predict(rotor_rig, ...) and its siblings, af.identify of a rotor's four experiments' recordings
+# (4, samples, 4; rig=...), run the N-axis functions of this namespace.
+register(RotorRig, sys.modules[__name__], 4)

@@ -25,46 +25,33 @@ from pathlib import Path
 from typing import Any
 
 from .._params import PID, Rig
+from .._toml import read_table
 from ._rotor import RigidRotor, RotorRig
 
 _SECTIONS = {"rotor": RigidRotor, "axes": Rig, "controller": PID}
 
 
 def load_rotor(path: str | os.PathLike[str]) -> tuple[RotorRig, PID]:
-    """The rotor rig and its controller from a rotor file (see the module's docstring). Errors name the file
-    and the section and key."""
-    path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"rotor file must be an existing file, got {str(path)!r}")
-    if path.suffix.lower() != ".toml":
-        raise ValueError(f"rotor file must end in .toml, got {str(path)!r}")
-    import tomllib
-
-    try:
-        with open(path, "rb") as file:
-            data = tomllib.load(file)
-    except tomllib.TOMLDecodeError as error:
-        raise ValueError(f"rotor file {path}: not valid TOML ({error})") from None
+    """The rotor rig and its controller from a rotor file (TOML, or the same tables in JSON: see the module's
+    docstring). Errors name the file and the section and key."""
+    data = read_table(path, "rotor file")
+    where = f"rotor file {str(Path(path))!r}"
     for section in data:
         if section not in _SECTIONS:
-            raise ValueError(f"rotor file {path}: unknown section [{section}] (expected {', '.join(_SECTIONS)})")
+            raise ValueError(f"{where}: unknown section [{section}] (expected {', '.join(_SECTIONS)})")
     values: dict[str, dict[str, Any]] = {}
     for section, kind in _SECTIONS.items():
-        table = data.get(section, {})
+        values[section] = table = data.get(section, {})
         if not isinstance(table, dict):
-            raise ValueError(f"rotor file {path}: [{section}] must be a table")
+            raise ValueError(f"{where}: [{section}] must be a table")
         known = {f.name for f in fields(kind)} - ({"mass"} if kind is Rig else set())
-        for key in table:
-            if key not in known:
-                raise ValueError(f"rotor file {path}: unknown key {key!r} in [{section}] (known: {sorted(known)})")
-        values[section] = table
-    example = RotorRig.example()
+        unknown = sorted(set(table) - known)
+        if unknown:
+            raise ValueError(f"{where}: unknown key {unknown[0]!r} in [{section}] (known: {sorted(known)})")
     try:
-        rotor_fields = {**{f.name: getattr(example.rotor, f.name) for f in fields(RigidRotor)}, **values["rotor"]}
-        rotor_fields["process"] = tuple(tuple(p) for p in rotor_fields["process"])
-        rotor = RigidRotor(**rotor_fields)
+        rotor = replace(RotorRig.example().rotor, **values["rotor"])  # type: ignore[type-var]  # a RigidRotor
         axis = replace(Rig.paper(), **values["axes"])
         controller = replace(RotorRig.example_controller(), **values["controller"])
     except (TypeError, ValueError) as error:
-        raise ValueError(f"rotor file {path}: {error}") from None
+        raise ValueError(f"{where}: {error}") from None
     return RotorRig(rotor, axis), controller

@@ -25,7 +25,7 @@ from .._equality import ArrayRecord
 from .._mechanics import Mechanics
 from .._ross import import_ross
 from .._validate import integer, real, require
-from ._rotor import AXES
+from ._rotor import bearing_mechanics
 
 NODE_TOLERANCE = 1e-9  # m: an unbalance plane within this of a node's axial position is at that node
 
@@ -99,16 +99,8 @@ class FlexibleRotor(ArrayRecord):
 
     def __hash__(self) -> int:  # type: ignore[override]  # by value, as the loop's models are cached per distinct rig
         arrays = (self.modal_mass, self.modal_stiffness, self.modal_gyroscopic, self.shapes)
-        return hash(
-            (
-                *(a.tobytes() for a in arrays),
-                self.positions,
-                self.bearings,
-                self.sensors,
-                self.speed,
-                self.damping_ratio,
-            )
-        )
+        rest = (self.positions, self.bearings, self.sensors, self.speed, self.damping_ratio)
+        return hash((*(a.tobytes() for a in arrays), *rest))
 
     @property
     def mass(self) -> float:
@@ -257,16 +249,9 @@ def _bending(M: np.ndarray, K: np.ndarray, R: np.ndarray, modes: int) -> np.ndar
 @functools.lru_cache(maxsize=64)
 def _flexible_mechanics(rotor: FlexibleRotor) -> Mechanics:
     """:meth:`FlexibleRotor.mechanics`, once per distinct rotor; read-only."""
-    n = rotor.modal_mass.shape[0]
-    actuators = np.vstack([rotor.shapes[node] for node in rotor.bearings])
-    probes = np.vstack([rotor.shapes[node] for node in rotor.sensors])
-    # The probes' readings moved to the bearing planes by the rigid-body map (the first four coordinates).
-    readout = actuators[:, :4] @ np.linalg.inv(probes[:, :4])
-    zero = np.zeros((n, n))
+    zero = np.zeros(rotor.modal_mass.shape)
     rates = 2 * rotor.damping_ratio * np.sqrt(np.diag(rotor.modal_stiffness))  # 2 zeta w_k, mass-normalised
     damping = np.diag(rates) if rotor.damping_ratio else None
-    matrices = (rotor.modal_mass, rotor.modal_gyroscopic, zero, zero, actuators, probes, readout)
-    for matrix in (zero, actuators, probes, readout):
-        matrix.flags.writeable = False
     names = ("x", "y", "tx", "ty") + tuple(f"mode{k}{p}" for k in range(1, rotor.modes + 1) for p in "xy")
-    return Mechanics(*matrices, rotor.speed, AXES, names, rotor.modal_stiffness, damping)
+    mass, gyroscopic, elastic = rotor.modal_mass, rotor.modal_gyroscopic, rotor.modal_stiffness
+    return bearing_mechanics(rotor, rotor.shapes.__getitem__, mass, gyroscopic, (zero, zero), names, elastic, damping)

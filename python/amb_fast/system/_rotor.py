@@ -9,7 +9,7 @@ from the centre of mass) is ``(x + z ty, y - z tx)``. ``m x'' = Qx``, ``m y'' = 
 from __future__ import annotations
 
 import functools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, Protocol, runtime_checkable
 
@@ -33,6 +33,38 @@ def _pair(name: str, value: Any, unit: str) -> tuple[float, float]:
     a, b = (real(f"{name}[{j}]", v, unit) for j, v in enumerate(value))
     require(a != b, name, value, "two different planes (one plane cannot hold the rotor's tilt)")
     return a, b
+
+
+def linear_chains(axes: Sequence[Any], names: Sequence[str], structure: str) -> tuple[Rig, ...]:
+    """Each axis a :class:`Rig` of the linear law without clearance or current limit, as N axes are modelled
+    (``names``: the parameters; ``structure``: where the rest is not modelled yet, "on rotors")."""
+    for name, axis in zip(names, axes):
+        require(isinstance(axis, Rig), name, type(axis).__name__, "an amb_fast.Rig")
+        require(axis.force_law == "linear", f"{name}.force_law", axis.force_law,
+                f"'linear' (the non-linear law is not modelled {structure} yet)")  # fmt: skip
+        require(axis.clearance is None, f"{name}.clearance", axis.clearance,
+                f"None (touchdown is not modelled {structure} yet)")  # fmt: skip
+        require(axis.current_limit is None, f"{name}.current_limit", axis.current_limit,
+                f"None (saturation is not modelled {structure} yet)")  # fmt: skip
+    return tuple(axes)
+
+
+def bearing_mechanics(
+    rotor: Any, at: Callable[[Any], np.ndarray], mass: np.ndarray, gyroscopic: np.ndarray,
+    process: tuple[np.ndarray, np.ndarray], names: tuple[str, ...],
+    elastic: np.ndarray | None = None, elastic_damping: np.ndarray | None = None,
+) -> Mechanics:  # fmt: skip
+    """A rotor's :class:`Mechanics` (read-only): its matrices (``process``: the stiffness, then the damping)
+    and ``at(plane)``, (2, n), the displacement at each of its bearings' and probes' planes."""
+    actuators = np.vstack([at(p) for p in rotor.bearings])
+    probes = np.vstack([at(p) for p in rotor.sensors])
+    # The probes' readings moved to the bearing planes by the rigid-body map (the first four coordinates).
+    readout = actuators[:, :4] @ np.linalg.inv(probes[:, :4])
+    for matrix in (mass, gyroscopic, *process, actuators, probes, readout, elastic, elastic_damping):
+        if matrix is not None:
+            matrix.flags.writeable = False
+    return Mechanics(mass, gyroscopic, *process, actuators, probes, readout, float(rotor.speed), AXES, names,
+                     elastic, elastic_damping)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -104,13 +136,7 @@ def _rotor_mechanics(rotor: RigidRotor) -> Mechanics:
         P = plane_map(z)
         K += P.T @ np.array([[0.0, kxy], [kyx, 0.0]]) @ P
         C += P.T @ np.array([[0.0, cxy], [cyx, 0.0]]) @ P
-    actuators = np.vstack([plane_map(z) for z in rotor.bearings])
-    probes = np.vstack([plane_map(z) for z in rotor.sensors])
-    readout = actuators @ np.linalg.inv(probes)  # the probes' readings moved to the bearing planes
-    matrices = (np.diag([m, m, It, It]), G, K, C, actuators, probes, readout)
-    for matrix in matrices:
-        matrix.flags.writeable = False
-    return Mechanics(*matrices, float(rotor.speed), AXES, ("x", "y", "tx", "ty"))
+    return bearing_mechanics(rotor, plane_map, np.diag([m, m, It, It]), G, (K, C), ("x", "y", "tx", "ty"))
 
 
 @runtime_checkable
@@ -160,15 +186,7 @@ class RotorRig:
         axes = (self.axes,) * 4 if isinstance(self.axes, Rig) else self.axes
         ok = isinstance(axes, Sequence) and len(axes) == 4
         require(ok, "axes", self.axes, "a Rig, or 4 of them (A.x, A.y, B.x, B.y)")
-        for name, axis in zip(AXES, axes):
-            require(isinstance(axis, Rig), f"axes[{name}]", type(axis).__name__, "an amb_fast.Rig")
-            require(axis.force_law == "linear", f"axes[{name}].force_law", axis.force_law,
-                    "'linear' (the non-linear law is not modelled on rotors yet)")  # fmt: skip
-            require(axis.clearance is None, f"axes[{name}].clearance", axis.clearance,
-                    "None (touchdown is not modelled on rotors yet)")  # fmt: skip
-            require(axis.current_limit is None, f"axes[{name}].current_limit", axis.current_limit,
-                    "None (saturation is not modelled on rotors yet)")  # fmt: skip
-        object.__setattr__(self, "axes", tuple(axes))
+        object.__setattr__(self, "axes", linear_chains(axes, [f"axes[{name}]" for name in AXES], "on rotors"))
 
     @classmethod
     def example(cls, speed: float = 0.0) -> RotorRig:

@@ -1,21 +1,23 @@
 """Two axes of a radial magnetic bearing: 2x2 stiffness and damping matrices, identified, exported to ROSS.
 
-Here live :class:`TwoAxisRig` (two one-axis rigs on one rotor, a cross-coupling process, rotated probes),
-the two-axis loop in closed form (:func:`predict`, :func:`closed_loop_poles`, :func:`stability_margin`,
-:func:`effective_coefficients`), its simulation on the compiled dense MIMO loop (:func:`simulate`), the
-two-experiment identification (:func:`run_experiment`, :func:`identify` giving an :class:`Estimate2`,
-the N-axis :class:`~amb_fast.system.EstimateN` of two axes), sweeps over two-axis rigs, the export to
-``ross.BearingElement`` (:func:`to_ross`) and a pure-numpy reference loop (:mod:`amb_fast.two_axis.reference`).
-Same names and signatures as the one-axis API, with a :class:`TwoAxisRig` in place of a :class:`~amb_fast.Rig`.
+Here lives :class:`TwoAxisRig` (two one-axis rigs on one rotor, a cross-coupling process, rotated probes),
+a structure of the N-axis model (:mod:`amb_fast.system`), with that model's functions under the names
+and signatures of the one-axis API, taking a :class:`TwoAxisRig` in place of a :class:`~amb_fast.Rig`:
+the loop in closed form (:func:`predict`, :func:`closed_loop_poles`, :func:`stability_margin`,
+:func:`effective_coefficients`), its simulation (:func:`simulate`), the two-experiment identification
+(:func:`run_experiment`, :func:`identify` giving an :class:`Estimate2`, the N-axis
+:class:`~amb_fast.system.EstimateN` of two axes), sweeps and the export to ``ross.BearingElement``
+(:func:`to_ross`).
 """
 
 from __future__ import annotations
 
 import sys
 
-from .._dispatch import register, register_recordings
+from .._dispatch import register
 from .._ross import coefficient_arrays, to_ross
 from ..plots import plot_coefficients2
+from ..system import ControllerMatrix
 from ._command import add_two_axis_options, run_two_axis, save_estimate2, summary2
 from ._experiment import (
     SIGNS,
@@ -30,7 +32,6 @@ from ._experiment import (
     sweep,
 )
 from ._model import (
-    ControllerMatrix,
     StabilityMargin2,
     closed_loop,
     closed_loop_poles,
@@ -78,5 +79,5 @@ __all__ = [
     "to_ross",
 ]
 
-register(TwoAxisRig, sys.modules[__name__])
-register_recordings(2, identify)
+# af.predict(two_axis_rig, ...) and its siblings, af.identify of two experiments' recordings, run these.
+register(TwoAxisRig, sys.modules[__name__], 2)

@@ -10,6 +10,7 @@ import numpy as np
 from .._mechanics import Mechanics
 from .._params import Rig
 from .._validate import real, require
+from ..system import linear_chains
 
 
 @dataclass(frozen=True)
@@ -44,15 +45,7 @@ class TwoAxisRig:
     sensor_angle: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("x", "y"):
-            axis = getattr(self, name)
-            require(isinstance(axis, Rig), name, type(axis).__name__, "an amb_fast.Rig")
-            require(axis.force_law == "linear", f"{name}.force_law", axis.force_law,
-                    "'linear' (the non-linear law is not modelled on two axes yet)")  # fmt: skip
-            require(axis.clearance is None, f"{name}.clearance", axis.clearance,
-                    "None (touchdown is not modelled on two axes yet)")  # fmt: skip
-            require(axis.current_limit is None, f"{name}.current_limit", axis.current_limit,
-                    "None (saturation is not modelled on two axes yet)")  # fmt: skip
+        linear_chains(self.axes, ("x", "y"), "on two axes")
         require(self.x.mass == self.y.mass, "y.mass", self.y.mass, f"equal to x.mass ({self.x.mass} kg): one rotor")
         for name, unit in (("kxy", "N/m"), ("kyx", "N/m"), ("cxy", "N s/m"), ("cyx", "N s/m"), ("sensor_angle", "rad")):
             real(name, getattr(self, name), unit)

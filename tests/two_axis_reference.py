@@ -1,7 +1,8 @@
-"""Pure-numpy reference of the two-axis loop, written from ``docs/model.md`` independently of the core.
+"""Pure-numpy reference of the two-axis loop, written from ``docs/model.md`` independently of the package's
+N-axis code (for comparison tests, as ``rotor_reference.py``).
 
 A plain Python loop, slow on purpose: the tests compare the compiled MIMO loop and the closed-form
-prediction with it. The plant is written out from the equations (not from :mod:`._model`), each sample
+prediction with it. The plant is written out from the equations (not from :mod:`amb_fast.system`), each sample
 is integrated in pieces between the instants at which an axis' dead-time fraction switches its
 command (:func:`scipy.signal.cont2discrete` per piece), and every SISO controller entry runs as its own
 difference equation with its own delay queue.
@@ -14,9 +15,9 @@ from collections import deque
 import numpy as np
 from scipy.signal import cont2discrete
 
-from .._linear import state_space
-from ._model import ControllerSpec, controller_matrix
-from ._rig import TwoAxisRig
+from amb_fast import TwoAxisRig
+from amb_fast._linear import state_space
+from amb_fast.system import ControllerSpec, controller_matrix
 
 
 def continuous_plant(rig: TwoAxisRig) -> tuple[np.ndarray, np.ndarray, list[str]]:
@@ -75,7 +76,7 @@ def simulate(
     ``sensor_noise`` (n, 2), m, is added to the probe readings (the controllers see it); no force noise.
     """
     force = np.asarray(force, dtype=float)
-    spec = controller_matrix(controller)
+    spec = controller_matrix(controller, 2)
     T = 1.0 / spec.fs
     A, B, names = continuous_plant(rig)
     ix = {name: j for j, name in enumerate(names)}
