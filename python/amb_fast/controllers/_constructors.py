@@ -57,8 +57,6 @@ class _Constructors:
         delay : int
             Extra whole-sample computation delay.
         """
-        real("fs", fs, "Hz", positive=True)
-        integer("delay", delay, 0)
         n, d = _proper_pair(num, den, "z-domain transfer function")
         k = float(n[0] / d[0])
         ss = _zpk_ss(np.roots(n), np.roots(d), k) if k != 0 else _zpk_ss(np.zeros(0), np.roots(d), 0.0)
@@ -68,17 +66,13 @@ class _Constructors:
     def from_zpk(cls, z: ArrayLike, p: ArrayLike, k: float, fs: float, delay: int = 0) -> Controller:
         """From zeros ``z``, poles ``p`` (z-plane, real or in conjugate pairs, ``len(z) <= len(p) <= 24``)
         and gain ``k``: ``k prod(z - z_i) / prod(z - p_j) z^-delay``; ``fs`` in Hz."""
-        real("fs", fs, "Hz", positive=True)
-        integer("delay", delay, 0)
         zeros, poles = (np.atleast_1d(np.asarray(v, dtype=complex)) for v in (z, p))
         for name, roots, given in (("z", zeros, z), ("p", poles, p)):
             require(roots.ndim == 1 and bool(np.all(np.isfinite(roots))), name, given, "a 1-D sequence of finite roots")
             _conjugate_pairs(name, roots, given)
         require(zeros.size <= poles.size, "z", z, f"no more zeros than poles ({poles.size}): otherwise non-causal")
-        if poles.size > MAX_ORDER:
-            raise ValueError(f"p must be at most {MAX_ORDER} poles (the largest controller order), got {poles.size}")
-        gain = real("k", k, "gain")
-        return cls._raw("zpk", _zpk_ss(zeros, poles, gain), fs, delay)
+        require(poles.size <= MAX_ORDER, "p", poles.size, f"at most {MAX_ORDER} poles (the largest controller order)")
+        return cls._raw("zpk", _zpk_ss(zeros, poles, real("k", k, "gain")), fs, delay)
 
     @classmethod
     def from_sos(cls, sos: ArrayLike, fs: float, delay: int = 0) -> Controller:
@@ -86,8 +80,6 @@ class _Constructors:
         realised section by section; ``fs`` in Hz. Each row is ``(b0 z^2 + b1 z + b2) / (a0 z^2 + a1 z +
         a2)``, the same as in powers of z^-1; ``a0 != 0``, or ``b0 = a0 = 0`` for a first-order section
         (as ``scipy.signal.zpk2sos(..., pairing="minimal")`` writes them)."""
-        real("fs", fs, "Hz", positive=True)
-        integer("delay", delay, 0)
         try:
             array = np.atleast_2d(np.asarray(sos, dtype=float))
         except (TypeError, ValueError):
@@ -98,16 +90,13 @@ class _Constructors:
         causal = all(k < 3 and not np.any(row[:k]) for k, row in zip(lead, array))
         require(causal, "sos", sos, "causal in every section: a0 != 0, or b0 = a0 = 0 for a first-order one")
         ss = _sections_ss([(row[:3], row[3:]) for row in array])
-        if ss[0].shape[0] > MAX_ORDER:
-            raise ValueError(f"sos must be of total order <= {MAX_ORDER}, got order {ss[0].shape[0]}")
+        require(ss[0].shape[0] <= MAX_ORDER, "sos", ss[0].shape[0], f"of total order <= {MAX_ORDER} (its states)")
         return cls._raw("sos", ss, fs, delay)
 
     @classmethod
     def from_ss(cls, A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike, fs: float, delay: int = 0) -> Controller:
         """From a discrete state space (kept as given): A (n, n), B (n, 1), C (1, n), D (1, 1); a 1-D B or
         C and a scalar D are read as a column, a row and 1x1. n <= 24; ``fs`` in Hz."""
-        real("fs", fs, "Hz", positive=True)
-        integer("delay", delay, 0)
         arrays = {}
         for name, value in (("A", A), ("B", B), ("C", C), ("D", D)):
             arrays[name] = _real_array(name, value, "a real matrix")
@@ -115,8 +104,7 @@ class _Constructors:
         a = arrays["A"].reshape(0, 0) if arrays["A"].size == 0 else np.atleast_2d(arrays["A"])
         require(a.ndim == 2 and a.shape[0] == a.shape[1], "A", A, "square")
         n = a.shape[0]
-        if n > MAX_ORDER:
-            raise ValueError(f"A must be of order <= {MAX_ORDER} (the largest controller order), got order {n}")
+        require(n <= MAX_ORDER, "A", n, f"of order <= {MAX_ORDER} (the largest controller order)")
         b, c, d = arrays["B"], arrays["C"], arrays["D"]
         b = b.reshape(n, 1) if b.ndim == 1 and b.size == n else b.reshape(0, 1) if n == 0 else b
         c = c.reshape(1, n) if c.ndim == 1 and c.size == n else c.reshape(1, 0) if n == 0 else c

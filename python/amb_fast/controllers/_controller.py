@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 
 from .._validate import integer, real, require
 from ._constructors import _Constructors
-from ._statespace import MAX_ORDER, Matrices, _delay_ss, _empty, _parallel_ss, _series_ss
+from ._statespace import MAX_ORDER, Matrices, _delay_ss, _join, _static
 
 Poly = tuple[float, ...]
 
@@ -262,51 +262,39 @@ class Controller(_Constructors):
         leaf: Controller = next(leaves)
         return leaf
 
-    # ---- algebra
-    def __mul__(self, other: Any) -> Controller:
-        other = _converted(other)  # a PID composes as its Controller
+    # ---- algebra: a number is a gain block at this fs; a PID composes as its Controller
+    def _operand(self, other: Any) -> Controller | None:
+        other = _converted(other)
         if isinstance(other, Controller):
-            return series(self, other)
-        if isinstance(other, Real) and not isinstance(other, bool):
-            return series(self, gain(float(other), self.fs))
-        return NotImplemented
+            return other
+        return gain(float(other), self.fs) if _is_number(other) else None
+
+    def __mul__(self, other: Any) -> Controller:
+        block = self._operand(other)
+        return NotImplemented if block is None else series(self, block)
 
     def __rmul__(self, other: Any) -> Controller:
-        other = _converted(other)
-        if isinstance(other, Controller):
-            return series(other, self)
-        if isinstance(other, Real) and not isinstance(other, bool):
-            return series(gain(float(other), self.fs), self)
-        return NotImplemented
+        block = self._operand(other)
+        return NotImplemented if block is None else series(block, self)
 
     def __add__(self, other: Any) -> Controller:
-        other = _converted(other)
-        if isinstance(other, Controller):
-            return parallel(self, other)
-        if isinstance(other, Real) and not isinstance(other, bool) and other == 0:
+        if _is_number(other) and other == 0:
             return self  # so that sum(controllers) works
-        if isinstance(other, Real) and not isinstance(other, bool):
-            return parallel(self, gain(float(other), self.fs))
-        return NotImplemented
+        block = self._operand(other)
+        return NotImplemented if block is None else parallel(self, block)
 
     def __radd__(self, other: Any) -> Controller:
-        other = _converted(other)
-        if isinstance(other, Controller):
-            return parallel(other, self)
-        if isinstance(other, Real) and not isinstance(other, bool) and other == 0:
+        if _is_number(other) and other == 0:
             return self
-        if isinstance(other, Real) and not isinstance(other, bool):
-            return parallel(gain(float(other), self.fs), self)
-        return NotImplemented
+        block = self._operand(other)
+        return NotImplemented if block is None else parallel(block, self)
 
     def __neg__(self) -> Controller:
         return -1.0 * self
 
     def __sub__(self, other: Any) -> Controller:
         other = _converted(other)
-        if isinstance(other, (Controller, Real)) and not isinstance(other, bool):
-            return self + (-1.0) * other
-        return NotImplemented
+        return self + (-1.0) * other if isinstance(other, Controller) or _is_number(other) else NotImplemented
 
     # ---- display
     def _describe(self, top: bool = False) -> str:
@@ -346,16 +334,8 @@ def _converted(block: Any) -> Any:
     return convert() if not isinstance(block, Controller) and callable(convert) else block
 
 
-def _same_fs(blocks: Sequence[Controller], what: str) -> float:
-    for block in blocks:
-        require(isinstance(block, Controller), "blocks", block, f"Controllers or PIDs (in a {what})")
-    rates = sorted({b.fs for b in blocks})
-    require(len(rates) == 1, "fs", rates, f"the same for every block of a {what}")
-    return rates[0]
-
-
-def _flatten(blocks: Sequence[Controller], kind: str) -> tuple[Controller, ...]:
-    return tuple(p for b in blocks for p in (b._parts if b._kind == kind else (b,)))
+def _is_number(value: Any) -> bool:
+    return isinstance(value, Real) and not isinstance(value, bool)
 
 
 def _polymul(a: ArrayLike, b: ArrayLike) -> np.ndarray:
@@ -370,30 +350,48 @@ def _polymul(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     return np.convolve(trimmed(a), trimmed(b))
 
 
+def _combine(blocks: Sequence[Controller], kind: str) -> Controller:
+    """The blocks (PIDs converted) in series or in parallel, nested combinations of the same kind flattened."""
+    what = "series" if kind == "series" else "parallel connection"
+    require(len(blocks) >= 1, "blocks", blocks, "at least one Controller")
+    blocks = tuple(_converted(b) for b in blocks)
+    for block in blocks:
+        require(isinstance(block, Controller), "blocks", block, f"Controllers or PIDs (in a {what})")
+    rates = sorted({b.fs for b in blocks})
+    require(len(rates) == 1, "fs", rates, f"the same for every block of a {what}")
+    if len(blocks) == 1:
+        return blocks[0]
+    parts = tuple(p for b in blocks for p in (b._parts if b._kind == kind else (b,)))
+    # in parallel, the common delay is the result's; the rest of a branch's is a shift register in series
+    delay = sum(p.delay for p in parts) if kind == "series" else min(p.delay for p in parts)
+    ss: Matrices | None = None
+    for p in parts:
+        part = p.to_ss()
+        if kind == "parallel" and p.delay > delay:
+            part = _join(part, _delay_ss(p.delay - delay), series=True)
+        ss = part if ss is None else _join(ss, part, series=kind == "series")
+    assert ss is not None
+    require(ss[0].shape[0] <= MAX_ORDER, "order", ss[0].shape[0], f"<= {MAX_ORDER} for the {what}")
+    continuous = None
+    if all(p._continuous is not None for p in parts):  # the product or the sum of the continuous designs
+        num, den = (np.ones(1) if kind == "series" else np.zeros(1)), np.ones(1)
+        for p in parts:
+            assert p._continuous is not None
+            pn, pd = p._continuous
+            if kind == "series":
+                num, den = _polymul(num, pn), _polymul(den, pd)
+            else:
+                num, den = np.polyadd(_polymul(num, pd), _polymul(pn, den)), _polymul(den, pd)
+        continuous = (num, den)
+    return Controller._make(ss, fs=rates[0], delay=delay, continuous=continuous, kind=kind, parts=parts)
+
+
 def series(*blocks: Controller) -> Controller:
     """The blocks in series (``a * b * ...``): responses multiply, delays add. Equal ``fs`` required.
 
     The continuous design is kept (the product) when every block has one.
     """
-    require(len(blocks) >= 1, "blocks", blocks, "at least one Controller")
-    blocks = tuple(_converted(b) for b in blocks)
-    fs = _same_fs(blocks, "series")
-    if len(blocks) == 1:
-        return blocks[0]
-    parts = _flatten(blocks, "series")
-    ss = parts[0].to_ss()
-    for part in parts[1:]:
-        ss = _series_ss(ss, part.to_ss())
-    continuous = None
-    if all(p._continuous is not None for p in parts):
-        num: np.ndarray = np.ones(1)
-        den: np.ndarray = np.ones(1)
-        for p in parts:
-            assert p._continuous is not None
-            num, den = _polymul(num, p._continuous[0]), _polymul(den, p._continuous[1])
-        continuous = (num, den)
-    require(ss[0].shape[0] <= MAX_ORDER, "order", ss[0].shape[0], f"<= {MAX_ORDER} for the series")
-    return Controller._make(ss, fs, sum(p.delay for p in parts), continuous=continuous, kind="series", parts=parts)
+    return _combine(blocks, "series")
 
 
 def parallel(*blocks: Controller) -> Controller:
@@ -403,29 +401,7 @@ def parallel(*blocks: Controller) -> Controller:
     branch's delay is realised as extra states (a shift register). The continuous design is kept (the
     sum) when every block has one.
     """
-    require(len(blocks) >= 1, "blocks", blocks, "at least one Controller")
-    blocks = tuple(_converted(b) for b in blocks)
-    fs = _same_fs(blocks, "parallel connection")
-    if len(blocks) == 1:
-        return blocks[0]
-    parts = _flatten(blocks, "parallel")
-    common = min(p.delay for p in parts)
-    ss: Matrices | None = None
-    for p in parts:
-        branch = _series_ss(p.to_ss(), _delay_ss(p.delay - common)) if p.delay > common else p.to_ss()
-        ss = branch if ss is None else _parallel_ss(ss, branch)
-    assert ss is not None
-    continuous = None
-    if all(p._continuous is not None for p in parts):
-        num: np.ndarray = np.zeros(1)
-        den: np.ndarray = np.ones(1)
-        for p in parts:
-            assert p._continuous is not None
-            pn, pd = p._continuous
-            num, den = np.polyadd(_polymul(num, pd), _polymul(pn, den)), _polymul(den, pd)
-        continuous = (num, den)
-    require(ss[0].shape[0] <= MAX_ORDER, "order", ss[0].shape[0], f"<= {MAX_ORDER} for the parallel connection")
-    return Controller._make(ss, fs, common, continuous=continuous, kind="parallel", parts=parts)
+    return _combine(blocks, "parallel")
 
 
 def gain(value: float, fs: float = 4000.0) -> Controller:
@@ -439,17 +415,13 @@ def gain(value: float, fs: float = 4000.0) -> Controller:
         Sampling frequency, Hz.
     """
     k = real("value", value, "gain")
-    A, B, C, _ = _empty()
-    return Controller._make(
-        (A, B, C, np.array([[k]])), fs, 0, continuous=([k], [1.0]), kind="gain", local=(("gain", k),)
-    )
+    return Controller._make(_static(k), fs, 0, continuous=([k], [1.0]), kind="gain", local=(("gain", k),))
 
 
 def pure_delay(samples: int, fs: float = 4000.0) -> Controller:
     """z^-samples: a whole-sample delay with no states and no parameters (continuous prototype 1)."""
     d = integer("samples", samples, 0)
-    A, B, C, _ = _empty()
-    return Controller._make((A, B, C, np.ones((1, 1))), fs, d, continuous=([1.0], [1.0]), kind="delay")
+    return Controller._make(_static(1.0), fs, d, continuous=([1.0], [1.0]), kind="delay")
 
 
 def _rebuild_gain(leaf: Controller, **values: float) -> Controller:
