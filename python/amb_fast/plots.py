@@ -213,11 +213,11 @@ def plot_overlay(
     return _finish(fig, axes, title, f, [estimate.c_smooth, np.asarray(c_eff, dtype=float)])
 
 
-def _inset(ax, freq: np.ndarray, curves: list[tuple[np.ndarray, str]], zoom: tuple[float, float]) -> None:  # noqa: ANN001
+def _inset(ax, freq: np.ndarray, curves: list[np.ndarray], zoom: tuple[float, float]) -> None:  # noqa: ANN001
     band = (freq >= zoom[0]) & (freq <= zoom[1])
     inner = ax.inset_axes((0.62, 0.08, 0.35, 0.45))
-    for values, label in curves:
-        inner.plot(freq[band], values[band], lw=1.0, label=label)
+    for values in curves:
+        inner.plot(freq[band], values[band], lw=1.0, label="")
     inner.tick_params(labelsize=6)
     inner.set_title(f"{zoom[0]:.0f}-{zoom[1]:.0f} Hz", fontsize=7)
     ax.indicate_inset_zoom(inner, edgecolor="0.5")
@@ -230,12 +230,9 @@ def _axis_label(name: str) -> tuple[str, str]:
     return LABELS.get(name, (name, unit_of(name)))
 
 
-def _point_label(names: list[str], values: list[float]) -> str:
-    parts = []
-    for name, value in zip(names, values):
-        symbol, unit = _axis_label(name)
-        parts.append(f"{symbol} = {value:.6g}" + (f" {unit}" if unit else ""))
-    return ", ".join(parts)
+def _value_label(name: str, value: float) -> str:
+    symbol, unit = _axis_label(name)
+    return f"{symbol} = {value:.6g}" + (f" {unit}" if unit else "")
 
 
 def plot_family(
@@ -283,15 +280,15 @@ def plot_family(
     with np.errstate(divide="ignore", invalid="ignore"):  # NaN rows of points without an estimate
         receptance = np.abs(1 / result.H)
     for row in rows:
-        label = _point_label(names, [float(result.points[n][row]) for n in names])
+        label = ", ".join(_value_label(n, float(result.points[n][row])) for n in names)
         if result.status[row] != "ok":
             label += f" ({result.status[row]})"
         axes[0].plot(freq[band], result.k_smooth[row, band] / 1e3, label=label)
         axes[1].plot(freq[band], result.c_smooth[row, band], label=label)
         axes[2].plot(freq[band], receptance[row, band], label=label)
     if inset is not None and zoom is None:
-        _inset(axes[0], freq, [(result.k_smooth[r] / 1e3, "") for r in rows], inset)
-        _inset(axes[2], freq, [(receptance[r], "") for r in rows], inset)
+        _inset(axes[0], freq, [result.k_smooth[r] / 1e3 for r in rows], inset)
+        _inset(axes[2], freq, [receptance[r] for r in rows], inset)
     axes[0].legend(fontsize=8 if len(names) == 1 else 7)
     where = "" if zoom is None else f", {zoom[0]:.0f}-{zoom[1]:.0f} Hz"
     others = [_axis_label(n)[0] for n in names[1:]]

@@ -148,12 +148,7 @@ class Design(ArrayRecord):
                 f"{self.unconstrained_residual:.4g}) is unstable or over the sensitivity limit; this is the best "
                 f"feasible design (objective {self.residual:.4g})"
             )
-        if (
-            self.feasible
-            and np.isfinite(self.start_peak)
-            and self.max_sensitivity is not None
-            and self.start_peak > self.max_sensitivity
-        ):
+        if self.feasible and self.max_sensitivity is not None and self.max_sensitivity < self.start_peak < np.inf:
             out.append(f"the start controller's sensitivity peak {self.start_peak:.3f} is over the limit: the design "
                        "started from a feasible point found by minimising the peak from it")  # fmt: skip
         if self.feasible and not self.constrained and self.residual > 1e-3:

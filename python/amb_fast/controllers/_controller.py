@@ -406,10 +406,8 @@ class Controller:
         return self._reassemble(iter(rebuilt))
 
     def _reassemble(self, leaves: Any) -> Controller:
-        if self._kind == "series":
-            return series(*(part._reassemble(leaves) for part in self._parts))
-        if self._kind == "parallel":
-            return parallel(*(part._reassemble(leaves) for part in self._parts))
+        if self._kind in ("series", "parallel"):
+            return _combine([part._reassemble(leaves) for part in self._parts], self._kind)
         leaf: Controller = next(leaves)
         return leaf
 
