@@ -24,6 +24,7 @@ from ._problem import _actual, _check_controller, _check_rig, _names
 
 GAINS = ("kp", "ki", "kd")
 _GRID_POINTS = 1500  # sensitivity grid of the constraint during the search (the result is checked on 20000)
+_NYQUIST_FRACTION = 0.999  # a block frequency's upper limit, as a fraction of fs/2
 
 
 @dataclass(frozen=True, eq=False)
@@ -290,8 +291,8 @@ def design_controller(
     # A block's frequency (notch_freq, low_pass_freq, lead_lag_zero, ...) must stay below the Nyquist
     # frequency (the block is prewarped there): the search keeps it inside that range.
     lower = np.full(len(names), -np.inf)
-    upper = np.array([np.log(_NYQUIST_FRACTION * controller.fs / 2) if lg and _is_frequency(n) else np.inf
-                      for n, lg in zip(names, logs)])  # fmt: skip
+    is_frequency = [lg and n.endswith(("_freq", "_zero", "_pole")) for n, lg in zip(names, logs)]
+    upper = np.where(is_frequency, np.log(_NYQUIST_FRACTION * controller.fs / 2), np.inf)
 
     def values(x: np.ndarray) -> dict[str, float]:
         return {n: float(np.exp(v) if lg else v * s) for n, v, lg, s in zip(names, x, logs, scale)}
@@ -305,16 +306,11 @@ def design_controller(
 
     def residuals(x: np.ndarray) -> np.ndarray:
         k, c = coefficients(x)
-        parts = []
-        if k_target is not None:
-            parts.append(wk * (k - k_target) / sk)
-        if c_target is not None:
-            parts.append(wc * (c - c_target) / sc)
-        return np.concatenate(parts)
+        misses = ((wk, k, k_target, sk), (wc, c, c_target, sc))
+        return np.concatenate([wt * (v - target) / s for wt, v, target, s in misses if target is not None])
 
     def objective(x: np.ndarray) -> float:
-        r = residuals(x)
-        return float(np.sqrt(np.mean(r**2)))
+        return _rms(residuals(x))
 
     # Unconstrained optimum: exact when the residuals are affine in x (checked at two other points).
     r0 = residuals(x0)
@@ -336,10 +332,10 @@ def design_controller(
     def peak(x: np.ndarray) -> float:
         return float(np.max(np.abs(sensitivity(*model(x), grid))))
 
-    def feasible(x: np.ndarray, margin: float = 0.0) -> bool:
+    def feasible(x: np.ndarray) -> bool:
         if np.any(x > upper) or radius(x) >= 1.0 - 1e-9:
             return False
-        return max_sensitivity is None or peak(x) <= max_sensitivity * (1.0 - margin)
+        return max_sensitivity is None or peak(x) <= max_sensitivity
 
     x_best, constrained, found = x_star, False, True
     start_peak = peak(x0) if radius(x0) < 1.0 else float("inf")
@@ -409,14 +405,6 @@ def _zero_scale(name: str, start: dict[str, float], w: np.ndarray) -> float:
     kp = abs(start.get("kp", 0.0)) or 1000.0
     wm = float(np.sqrt(w.min() * w.max()))
     return {"kp": kp, "ki": kp * wm, "kd": kp / wm}.get(name, 1.0)
-
-
-_NYQUIST_FRACTION = 0.999  # a block frequency's upper limit, as a fraction of fs/2
-
-
-def _is_frequency(name: str) -> bool:
-    """A block's frequency parameter (Hz), prewarped and so below the Nyquist frequency."""
-    return name.endswith(("_freq", "_zero", "_pole"))
 
 
 def _feasible_start(

@@ -128,18 +128,12 @@ def _sections_ss(sections: Sequence[tuple[np.ndarray, np.ndarray]]) -> Matrices:
     return ss
 
 
-def _split(roots: np.ndarray) -> tuple[list[float], list[complex]]:
-    """Real roots (sorted) and the upper members of the complex-conjugate pairs."""
+def _factors(roots: np.ndarray) -> list[list[complex]]:
+    """Roots grouped into quadratic factors (a conjugate pair, or two neighbouring real roots in sorted
+    order) and at most one linear factor (the last)."""
     tol = 1e-10 * np.maximum(1.0, np.abs(roots))
     real_roots = sorted(float(r.real) for r, t in zip(roots, tol) if abs(r.imag) <= t)
-    upper = [complex(r) for r, t in zip(roots, tol) if r.imag > t]
-    return real_roots, upper
-
-
-def _factors(roots: np.ndarray) -> list[list[complex]]:
-    """Roots grouped into quadratic factors (a conjugate pair, or two neighbouring real roots) and at
-    most one linear factor (the last)."""
-    real_roots, upper = _split(roots)
+    upper = [complex(r) for r, t in zip(roots, tol) if r.imag > t]  # the upper member of each conjugate pair
     groups: list[list[complex]] = [[r, r.conjugate()] for r in upper]
     groups += [[real_roots[j], real_roots[j + 1]] for j in range(0, len(real_roots) - 1, 2)]
     if len(real_roots) % 2:
