@@ -167,7 +167,8 @@ class Controller:
             require(roots.ndim == 1 and bool(np.all(np.isfinite(roots))), name, given, "a 1-D sequence of finite roots")
             _conjugate_pairs(name, roots, given)
         require(zeros.size <= poles.size, "z", z, f"no more zeros than poles ({poles.size}): otherwise non-causal")
-        require(poles.size <= MAX_ORDER, "p", poles.size, f"at most {MAX_ORDER} poles (the largest controller order)")
+        if poles.size > MAX_ORDER:
+            raise ValueError(f"p must be at most {MAX_ORDER} poles (the largest controller order), got {poles.size}")
         return cls._raw("zpk", _zpk_ss(zeros, poles, real("k", k, "gain")), fs, delay)
 
     @classmethod
@@ -186,7 +187,8 @@ class Controller:
         causal = all(k < 3 and not np.any(row[:k]) for k, row in zip(lead, array))
         require(causal, "sos", sos, "causal in every section: a0 != 0, or b0 = a0 = 0 for a first-order one")
         ss = _sections_ss([(row[:3], row[3:]) for row in array])
-        require(ss[0].shape[0] <= MAX_ORDER, "sos", ss[0].shape[0], f"of total order <= {MAX_ORDER} (its states)")
+        if ss[0].shape[0] > MAX_ORDER:
+            raise ValueError(f"sos must be of total order <= {MAX_ORDER}, got order {ss[0].shape[0]}")
         return cls._raw("sos", ss, fs, delay)
 
     @classmethod
@@ -200,7 +202,8 @@ class Controller:
         a = arrays["A"].reshape(0, 0) if arrays["A"].size == 0 else np.atleast_2d(arrays["A"])
         require(a.ndim == 2 and a.shape[0] == a.shape[1], "A", A, "square")
         n = a.shape[0]
-        require(n <= MAX_ORDER, "A", n, f"of order <= {MAX_ORDER} (the largest controller order)")
+        if n > MAX_ORDER:
+            raise ValueError(f"A must be of order <= {MAX_ORDER} (the largest controller order), got order {n}")
         b, c, d = arrays["B"], arrays["C"], arrays["D"]
         b = b.reshape(n, 1) if b.ndim == 1 and b.size == n else b.reshape(0, 1) if n == 0 else b
         c = c.reshape(1, n) if c.ndim == 1 and c.size == n else c.reshape(1, 0) if n == 0 else c

@@ -57,7 +57,10 @@ def _proper_pair(num: ArrayLike, den: ArrayLike, what: str) -> tuple[np.ndarray,
         num,
         f"of degree <= that of den (degree {d.size - 1}): a {what} of higher numerator degree is improper (non-causal)",
     )
-    require(d.size - 1 <= MAX_ORDER, "den", d.size - 1, f"of degree <= {MAX_ORDER} (the largest controller order)")
+    if d.size - 1 > MAX_ORDER:
+        raise ValueError(
+            f"den must be of degree <= {MAX_ORDER} (the largest controller order), got degree {d.size - 1}"
+        )
     return n, d
 
 
