@@ -19,13 +19,7 @@ SQRT_HALF = math.sqrt(0.5)
 
 
 def _block(
-    kind: str,
-    num: np.ndarray | list[float],
-    den: np.ndarray | list[float],
-    fs: float,
-    prewarp: float,
-    local: dict[str, float],
-    fixed: tuple = (),
+    kind: str, num: list[float], den: list[float], fs: float, prewarp: float, local: dict[str, float], fixed: tuple = ()
 ) -> Controller:
     """A block: the continuous prototype ``num/den`` discretised by Tustin, prewarped at ``prewarp`` (Hz)."""
     real("fs", fs, "Hz", positive=True)

@@ -112,17 +112,10 @@ class Controller:
     # ---- construction from matrices
     @classmethod
     def _make(
-        cls,
-        ss: Matrices,
-        fs: float,
-        delay: int,
-        *,
-        continuous: tuple[ArrayLike, ArrayLike] | None = None,
-        kind: str = "ss",
-        local: tuple[tuple[str, float], ...] = (),
-        parts: tuple[Controller, ...] = (),
+        cls, ss: Matrices, fs: float, delay: int, *, continuous: tuple[ArrayLike, ArrayLike] | None = None,
+        kind: str = "ss", local: tuple[tuple[str, float], ...] = (), parts: tuple[Controller, ...] = (),
         fixed: tuple[Any, ...] = (),
-    ) -> Controller:
+    ) -> Controller:  # fmt: skip
         A, B, C, D = (_poly_tuple(m) for m in ss)  # fs and delay are checked by __post_init__
         cont = None if continuous is None else (_poly_tuple(continuous[0]), _poly_tuple(continuous[1]))
         return cls(fs, delay, A, B, C, D[0], cont, kind, local, parts, fixed)
