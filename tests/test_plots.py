@@ -65,3 +65,19 @@ def test_without_matplotlib_every_figure_says_which_extra_to_install(estimate, m
     for draw in (lambda: af.plot_estimate(estimate), lambda: af.plot_coefficients2(est2)):
         with pytest.raises(ImportError, match=r"pip install 'amb_fast\[plot\]'"):
             draw()
+
+
+def test_plot_coefficients2_is_plot_coefficients_n_of_every_entry_in_one_row() -> None:
+    """Before: plot_coefficients2 drew panels of its own (``kxy (N/m)``, +-1.96 s.e.); now it is the N-axis
+    figure of every entry in one row: the same titles, units (kN/m) and lines as plot_coefficients_n."""
+    import amb_fast.two_axis as ta
+
+    est2 = ta.run_experiment(ta.TwoAxisRig.paper(), af.PID.paper(), af.schroeder_multisine(f0=20.0, f_max=100.0),
+                             periods=2, seed=1)  # fmt: skip
+    every = [("x", "x"), ("x", "y"), ("y", "x"), ("y", "y")]
+    two, n = af.plot_coefficients2(est2, smoothed=True), af.plot_coefficients_n(est2, terms=every, smoothed=True)
+    assert [ax.get_title() for ax in two.axes] == [ax.get_title() for ax in n.axes]
+    assert [ax.get_title() for ax in two.axes[:2]] == ["k[x, x] (kN/m)", "k[x, y] (kN/m)"]
+    for ours, theirs in zip(two.axes, n.axes):
+        np.testing.assert_array_equal(ours.lines[0].get_ydata(), theirs.lines[0].get_ydata())
+    np.testing.assert_array_equal(two.axes[1].lines[0].get_ydata(), est2.k_smooth[:, 0, 1] / 1e3)

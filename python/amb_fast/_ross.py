@@ -19,12 +19,10 @@ def coefficient_arrays(estimate: Any, *, smoothed: bool = False) -> dict[str, np
     """
     k = estimate.k_smooth if smoothed else estimate.k
     c = estimate.c_smooth if smoothed else estimate.c
-    if k.ndim == 1:  # one axis: the same on x and y
-        zero = np.zeros_like(k)
-        k = np.stack([np.stack([k, zero], -1), np.stack([zero, k], -1)], -2)
-        c = np.stack([np.stack([c, zero], -1), np.stack([zero, c], -1)], -2)
-    out = {f"k{a}{b}": np.array(k[:, i, j]) for i, a in enumerate("xy") for j, b in enumerate("xy")}
-    out |= {f"c{a}{b}": np.array(c[:, i, j]) for i, a in enumerate("xy") for j, b in enumerate("xy")}
+    if k.ndim == 1:  # one axis: the same on x and y, no cross terms
+        k, c = (np.where(np.eye(2, dtype=bool), v[:, None, None], 0.0) for v in (k, c))
+    pairs = [(i, j, f"{a}{b}") for i, a in enumerate("xy") for j, b in enumerate("xy")]
+    out = {f"{q}{ab}": np.array(m[:, i, j]) for q, m in (("k", k), ("c", c)) for i, j, ab in pairs}
     out["frequency"] = 2 * np.pi * np.asarray(estimate.freq, dtype=float)
     return out
 
@@ -62,16 +60,13 @@ def to_ross(estimate: Any, n: int, *, smoothed: bool = False, **kwargs: Any) -> 
     # ROSS fits a smoothing spline through the table (UnivariateSpline with its default smoothing), which
     # does not pass through the identified values; interpolate them exactly instead: linearly between
     # lines, the edge values held outside the band.
-    for name, values in arrays.items():
-        if name != "frequency" and hasattr(element, f"{name}_interpolated"):
-            setattr(element, f"{name}_interpolated", _exact(omega, values))
-    return element
-
-
-def _exact(omega: np.ndarray, values: np.ndarray):  # noqa: ANN202
     from scipy.interpolate import interp1d
 
-    return interp1d(omega, values, kind="linear", bounds_error=False, fill_value=(values[0], values[-1]))
+    for name, values in arrays.items():
+        if name != "frequency" and hasattr(element, f"{name}_interpolated"):
+            exact = interp1d(omega, values, kind="linear", bounds_error=False, fill_value=(values[0], values[-1]))
+            setattr(element, f"{name}_interpolated", exact)
+    return element
 
 
 def import_ross(what: str = "to_ross") -> Any:

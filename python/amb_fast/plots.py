@@ -109,13 +109,34 @@ def _nice_above(value: float) -> float:
     return float(10 ** (exponent + 1))  # pragma: no cover
 
 
-def _coefficient_axes(axes: np.ndarray, freq_unit: str = "Hz") -> None:
+QUANTITIES = (("k", 1e3, "kN/m"), ("c", 1.0, "N s/m"))  # an estimate's field, its scale to the axis's unit, unit
+
+
+def _frequency_axis(ax, scale: str = "log") -> None:  # noqa: ANN001
+    ax.set_xscale(scale)
+    ax.grid(True, which="both", alpha=0.3)
+
+
+def _band(ax, freq: np.ndarray, raw: np.ndarray, std: np.ndarray, scale: float, **style: Any) -> None:  # noqa: ANN001
+    """The raw estimate +-2 standard errors, shaded (in the axis's unit: divided by ``scale``)."""
+    ax.fill_between(freq, (raw - 2 * std) / scale, (raw + 2 * std) / scale, lw=0, **style)
+
+
+def _finish(fig: Figure, axes: np.ndarray, title: str, freq: np.ndarray, damping: list, scale: str = "log") -> Figure:
+    """Labels with units, frequency axes (``scale``) with grids, the damping axis (see the module docstring),
+    the title and the layout of a column of k, c (and |Y/F|) panels."""
     axes[0].set_ylabel("stiffness k (kN/m)")
     axes[1].set_ylabel("damping c (N s/m)")
-    axes[-1].set_xlabel(f"frequency ({freq_unit})")
+    if len(axes) == 3:
+        axes[2].set_ylabel("|Y/F| (m/N)")
+        axes[2].set_yscale(scale)  # a log receptance over log frequencies; linear over a zoomed band
+    axes[-1].set_xlabel("frequency (Hz)")
     for ax in axes:
-        ax.set_xscale("log")
-        ax.grid(True, which="both", alpha=0.3)
+        _frequency_axis(ax, scale)
+    _damping_scale(axes[1], freq, damping)
+    axes[0].set_title(title)
+    _tight_layout(fig)
+    return fig
 
 
 def plot_coefficients(
@@ -123,18 +144,13 @@ def plot_coefficients(
 ) -> Figure:
     """Stiffness and damping against frequency; ``raw`` adds the unfiltered estimates as dots."""
     fig, axes = _figure(2)
-    if raw is not None:
-        axes[0].plot(freq, raw[0] / 1e3, ".", ms=3, color="0.6", label="raw")
-        axes[1].plot(freq, raw[1], ".", ms=3, color="0.6", label="raw")
-    axes[0].plot(freq, k / 1e3, lw=1.5, label="median filtered" if raw is not None else None)
-    axes[1].plot(freq, c, lw=1.5)
+    for ax, (_, scale, _), values, dots in zip(axes, QUANTITIES, (k, c), raw or (None, None)):
+        if dots is not None:
+            ax.plot(freq, dots / scale, ".", ms=3, color="0.6", label="raw")
+        ax.plot(freq, values / scale, lw=1.5, label=None if raw is None else "median filtered")
     if raw is not None:
         axes[0].legend()
-    _coefficient_axes(axes)
-    _damping_scale(axes[1], freq, [c] if raw is None else [c, raw[1]])
-    axes[0].set_title(title)
-    _tight_layout(fig)
-    return fig
+    return _finish(fig, axes, title, freq, [c] if raw is None else [c, raw[1]])
 
 
 def plot_coefficients2(estimate: EstimateN, *, smoothed: bool = False, effective: tuple | None = None) -> Figure:
@@ -146,7 +162,7 @@ def plot_coefficients2(estimate: EstimateN, *, smoothed: bool = False, effective
         An estimate of N axes (two: :func:`amb_fast.two_axis.run_experiment`, :func:`amb_fast.two_axis.identify`).
     smoothed : bool
         Plot the median-filtered ``k_smooth``, ``c_smooth`` instead of the raw ``k``, ``c``. The bands
-        are always +-1.96 standard errors of the raw estimate.
+        are always +-2 standard errors of the raw estimate.
     effective : (K_eff, C_eff), optional
         Effective matrices at ``estimate.freq`` (N/m, N s/m; shape (lines, N, N)), as
         :func:`amb_fast.two_axis.effective_coefficients` returns them: drawn as dashed lines.
@@ -154,9 +170,9 @@ def plot_coefficients2(estimate: EstimateN, *, smoothed: bool = False, effective
     Returns
     -------
     matplotlib.figure.Figure
-        Top row ``kxx, kxy, kyx, kyy`` (N/m), bottom row ``cxx, cxy, cyx, cyy`` (N s/m) for two axes (every
-        entry ``k<i><j>`` of the axes' names for N), against frequency (Hz). Needs matplotlib (the ``plot``
-        extra).
+        :func:`plot_coefficients_n` of every entry in one row: top row ``k[x, x], k[x, y], k[y, x], k[y, y]``
+        (kN/m), bottom row ``c[x, x] .. c[y, y]`` (N s/m) for two axes, against frequency (Hz). Needs
+        matplotlib (the ``plot`` extra).
 
     Examples
     --------
@@ -164,31 +180,10 @@ def plot_coefficients2(estimate: EstimateN, *, smoothed: bool = False, effective
     >>> est = af.two_axis.run_experiment(rig, af.PID.paper(), af.schroeder_multisine(), seed=1)
     >>> fig = af.plot_coefficients2(est, effective=af.two_axis.effective_coefficients(rig, af.PID.paper(), est.freq))
     >>> [ax.get_title() for ax in fig.axes[4:]]
-    ['cxx (N s/m)', 'cxy (N s/m)', 'cyx (N s/m)', 'cyy (N s/m)']
+    ['c[x, x] (N s/m)', 'c[x, y] (N s/m)', 'c[y, x] (N s/m)', 'c[y, y] (N s/m)']
     """
-    k = estimate.k_smooth if smoothed else estimate.k
-    c = estimate.c_smooth if smoothed else estimate.c
-    names = estimate.axes
-    entries = [(i, j) for i in range(len(names)) for j in range(len(names))]
-    fig, axes = pyplot_module().subplots(2, len(entries), figsize=(3.5 * len(entries), 6), sharex=True, squeeze=False)
-    for col, (i, j) in enumerate(entries):
-        for row, (values, std, unit, name) in enumerate(((k, estimate.k_std, "N/m", "k"),
-                                                         (c, estimate.c_std, "N s/m", "c"))):  # fmt: skip
-            ax = axes[row, col]
-            ax.plot(estimate.freq, values[:, i, j], label="actual")
-            ax.fill_between(estimate.freq, values[:, i, j] - 1.96 * std[:, i, j],
-                            values[:, i, j] + 1.96 * std[:, i, j], alpha=0.3)  # fmt: skip
-            if effective is not None:
-                ax.plot(estimate.freq, effective[row][:, i, j], "--", label="effective")
-            ax.set_title(f"{name}{names[i]}{names[j]} ({unit})")
-            ax.set_xscale("log")  # as every other coefficient figure
-            ax.grid(True, which="both", alpha=0.3)
-            if row == 1:
-                ax.set_xlabel("frequency (Hz)")
-                _damping_scale(ax, estimate.freq, [values[:, i, j]])
-    axes[0, 0].legend()
-    _tight_layout(fig)
-    return fig
+    every = [(a, b) for a in estimate.axes for b in estimate.axes]
+    return plot_coefficients_n(estimate, terms=every, effective=effective, smoothed=smoothed)
 
 
 def plot_effective(study: PaperStudy) -> Figure:
@@ -209,26 +204,20 @@ def plot_overlay(
     +-2 s.e. band of the raw estimate; ``k_eff``, ``c_eff`` at ``estimate.freq`` (N/m, N s/m)."""
     fig, axes = _figure(2)
     f = estimate.freq
-    for ax, actual, std, effective, scale in ((axes[0], estimate.k_smooth, estimate.k_std, k_eff, 1e3),
-                                              (axes[1], estimate.c_smooth, estimate.c_std, c_eff, 1.0)):  # fmt: skip
-        raw = estimate.k if scale == 1e3 else estimate.c
-        ax.fill_between(f, (raw - 2 * std) / scale, (raw + 2 * std) / scale, color="C0", alpha=0.2, lw=0,
-                        label="actual, raw +-2 s.e.")  # fmt: skip
-        ax.plot(f, actual / scale, color="C0", lw=1.5, label="actual (median filtered)")
+    for ax, (q, scale, _), effective in zip(axes, QUANTITIES, (k_eff, c_eff)):
+        _band(ax, f, getattr(estimate, q), getattr(estimate, f"{q}_std"), scale, color="C0", alpha=0.2,
+              label="actual, raw +-2 s.e.")  # fmt: skip
+        ax.plot(f, getattr(estimate, f"{q}_smooth") / scale, color="C0", lw=1.5, label="actual (median filtered)")
         ax.plot(f, np.asarray(effective) / scale, color="C3", lw=1.5, ls="--", label="effective")
     axes[0].legend(fontsize=8)
-    _coefficient_axes(axes)
-    _damping_scale(axes[1], f, [estimate.c_smooth, np.asarray(c_eff, dtype=float)])
-    axes[0].set_title(title)
-    _tight_layout(fig)
-    return fig
+    return _finish(fig, axes, title, f, [estimate.c_smooth, np.asarray(c_eff, dtype=float)])
 
 
-def _inset(ax, freq: np.ndarray, curves: list[tuple[np.ndarray, str]], zoom: tuple[float, float]) -> None:  # noqa: ANN001
+def _inset(ax, freq: np.ndarray, curves: list[np.ndarray], zoom: tuple[float, float]) -> None:  # noqa: ANN001
     band = (freq >= zoom[0]) & (freq <= zoom[1])
     inner = ax.inset_axes((0.62, 0.08, 0.35, 0.45))
-    for values, label in curves:
-        inner.plot(freq[band], values[band], lw=1.0, label=label)
+    for values in curves:
+        inner.plot(freq[band], values[band], lw=1.0, label="")
     inner.tick_params(labelsize=6)
     inner.set_title(f"{zoom[0]:.0f}-{zoom[1]:.0f} Hz", fontsize=7)
     ax.indicate_inset_zoom(inner, edgecolor="0.5")
@@ -241,12 +230,9 @@ def _axis_label(name: str) -> tuple[str, str]:
     return LABELS.get(name, (name, unit_of(name)))
 
 
-def _point_label(names: list[str], values: list[float]) -> str:
-    parts = []
-    for name, value in zip(names, values):
-        symbol, unit = _axis_label(name)
-        parts.append(f"{symbol} = {value:.6g}" + (f" {unit}" if unit else ""))
-    return ", ".join(parts)
+def _value_label(name: str, value: float) -> str:
+    symbol, unit = _axis_label(name)
+    return f"{symbol} = {value:.6g}" + (f" {unit}" if unit else "")
 
 
 def plot_family(
@@ -294,30 +280,21 @@ def plot_family(
     with np.errstate(divide="ignore", invalid="ignore"):  # NaN rows of points without an estimate
         receptance = np.abs(1 / result.H)
     for row in rows:
-        label = _point_label(names, [float(result.points[n][row]) for n in names])
+        label = ", ".join(_value_label(n, float(result.points[n][row])) for n in names)
         if result.status[row] != "ok":
             label += f" ({result.status[row]})"
         axes[0].plot(freq[band], result.k_smooth[row, band] / 1e3, label=label)
         axes[1].plot(freq[band], result.c_smooth[row, band], label=label)
         axes[2].plot(freq[band], receptance[row, band], label=label)
-    axes[2].set_ylabel("|Y/F| (m/N)")
-    _coefficient_axes(axes)
-    if zoom is None:
-        axes[2].set_yscale("log")
-    else:
-        for ax in axes:
-            ax.set_xscale("linear")
-    _damping_scale(axes[1], freq[band], [result.c_smooth[row, band] for row in rows])
     if inset is not None and zoom is None:
-        _inset(axes[0], freq, [(result.k_smooth[r] / 1e3, "") for r in rows], inset)
-        _inset(axes[2], freq, [(receptance[r], "") for r in rows], inset)
+        _inset(axes[0], freq, [result.k_smooth[r] / 1e3 for r in rows], inset)
+        _inset(axes[2], freq, [receptance[r] for r in rows], inset)
     axes[0].legend(fontsize=8 if len(names) == 1 else 7)
     where = "" if zoom is None else f", {zoom[0]:.0f}-{zoom[1]:.0f} Hz"
     others = [_axis_label(n)[0] for n in names[1:]]
     title = f"Varying {symbol}" + (f" and {', '.join(others)}" if others else "")
-    axes[0].set_title(f"{title}{where}")
-    _tight_layout(fig)
-    return fig
+    damping = [result.c_smooth[row, band] for row in rows]
+    return _finish(fig, axes, f"{title}{where}", freq[band], damping, "log" if zoom is None else "linear")
 
 
 def plot_estimate(estimate: Estimate, *, title: str = "Identified stiffness, damping and receptance") -> Figure:
@@ -325,22 +302,17 @@ def plot_estimate(estimate: Estimate, *, title: str = "Identified stiffness, dam
     Weak lines (``Estimate.weak``) are marked with a cross."""
     fig, axes = _figure(3, height=2.6)
     f = estimate.freq
-    for ax, raw, std, smooth, scale in ((axes[0], estimate.k, estimate.k_std, estimate.k_smooth, 1e3),
-                                        (axes[1], estimate.c, estimate.c_std, estimate.c_smooth, 1.0)):  # fmt: skip
-        ax.fill_between(f, (raw - 2 * std) / scale, (raw + 2 * std) / scale, color="0.8", lw=0, label="raw +-2 s.e.")
+    weak = estimate.weak if estimate.weak is not None and estimate.weak.any() else None
+    for ax, (q, scale, _) in zip(axes, QUANTITIES):
+        raw = getattr(estimate, q)
+        _band(ax, f, raw, getattr(estimate, f"{q}_std"), scale, color="0.8", label="raw +-2 s.e.")
         ax.plot(f, raw / scale, ".", ms=3, color="0.45", label="raw")
-        ax.plot(f, smooth / scale, color="C0", lw=1.5, label="median filtered")
-        if estimate.weak is not None and estimate.weak.any():
-            ax.plot(f[estimate.weak], raw[estimate.weak] / scale, "x", color="C3", ms=5, label="weak line")
+        ax.plot(f, getattr(estimate, f"{q}_smooth") / scale, color="C0", lw=1.5, label="median filtered")
+        if weak is not None:
+            ax.plot(f[weak], raw[weak] / scale, "x", color="C3", ms=5, label="weak line")
     axes[2].plot(f, np.abs(estimate.receptance))
-    axes[2].set_yscale("log")
-    axes[2].set_ylabel("|Y/F| (m/N)")
-    _coefficient_axes(axes)
-    _damping_scale(axes[1], f, [estimate.c_smooth, estimate.c])
     axes[0].legend(fontsize=8)
-    axes[0].set_title(title)
-    _tight_layout(fig)
-    return fig
+    return _finish(fig, axes, title, f, [estimate.c_smooth, estimate.c])
 
 
 def plot_coefficients_n(
@@ -390,34 +362,29 @@ def plot_coefficients_n(
         shapes = [np.shape(m) for m in effective] if isinstance(effective, (tuple, list)) else []
         require(shapes == [estimate.k.shape] * 2, "effective", shapes or type(effective).__name__,
                 f"(K_eff, C_eff), each of shape {estimate.k.shape} (lines, N, N) at estimate.freq")  # fmt: skip
-    columns = N if grid else len(entries)
-    rows = 2 * (N if grid else 1)
+    columns, rows = (N, 2 * N) if grid else (len(entries), 2)
     fig, axes = pyplot_module().subplots(rows, columns, figsize=(3.2 * columns, 2.0 * rows), sharex=True, squeeze=False)
-    f = estimate.freq
-    k, c = (estimate.k_smooth, estimate.c_smooth) if smoothed else (estimate.k, estimate.c)
     for cell in axes.ravel():
         cell.set_visible(False)
-    panels = (
-        (0, k, estimate.k, estimate.k_std, 1e3, "k", "kN/m"),
-        (1, c, estimate.c, estimate.c_std, 1.0, "c", "N s/m"),
-    )
+    f = estimate.freq
     for n, (i, j) in enumerate(entries):
         top, column = (2 * i, j) if grid else (0, n)
-        for row, values, raw, std, scale, symbol, unit in panels:
+        for row, (q, scale, unit) in enumerate(QUANTITIES):
             ax = axes[top + row, column]
             ax.set_visible(True)
-            ax.plot(f, values[:, i, j] / scale, color="C0", lw=1.2, label="actual")
+            curves = [getattr(estimate, f"{q}_smooth" if smoothed else q)[:, i, j]]
+            ax.plot(f, curves[0] / scale, color="C0", lw=1.2, label="actual")
             if effective is not None:
-                ax.plot(f, effective[row][:, i, j] / scale, color="C3", lw=1.2, ls="--", label="effective")
-            lo, hi = raw[:, i, j] - 2 * std[:, i, j], raw[:, i, j] + 2 * std[:, i, j]
-            ax.fill_between(f, lo / scale, hi / scale, color="C0", alpha=0.2, lw=0, label="+-2 s.e.")
-            ax.set_title(f"{symbol}[{names[i]}, {names[j]}] ({unit})", fontsize=8)
-            ax.set_xscale("log")
-            ax.grid(True, which="both", alpha=0.3)
+                curves.append(effective[row][:, i, j])
+                ax.plot(f, curves[1] / scale, color="C3", lw=1.2, ls="--", label="effective")
+            raw, std = getattr(estimate, q)[:, i, j], getattr(estimate, f"{q}_std")[:, i, j]
+            _band(ax, f, raw, std, scale, color="C0", alpha=0.2, label="+-2 s.e.")
+            ax.set_title(f"{q}[{names[i]}, {names[j]}] ({unit})", fontsize=8)
+            _frequency_axis(ax)
             ax.tick_params(labelsize=7)
             ax.xaxis.set_tick_params(labelbottom=True)
             if row == 1:
-                _damping_scale(ax, f, [values[:, i, j]] + ([effective[1][:, i, j]] if effective is not None else []))
+                _damping_scale(ax, f, curves)
                 ax.set_xlabel("frequency (Hz)", fontsize=7)
     axes[0, entries[0][1] if grid else 0].legend(fontsize=7)
     _tight_layout(fig)

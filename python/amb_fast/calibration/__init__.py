@@ -16,6 +16,7 @@ report), ``_design`` (:func:`design_controller` and :class:`Design`), ``_cli`` (
 
 from __future__ import annotations
 
+from importlib import import_module
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -26,12 +27,7 @@ __all__ = ["Design", "RigFit", "design_controller", "fit_rig"]
 
 
 def __getattr__(name: str):  # noqa: ANN202 - scipy.optimize and scipy.stats load on first use (half a second)
-    if name in ("Design", "design_controller"):
-        from . import _design
-
-        return getattr(_design, name)
-    if name in ("RigFit", "fit_rig"):
-        from . import _fit
-
-        return getattr(_fit, name)
+    module = {"Design": "_design", "design_controller": "_design", "RigFit": "_fit", "fit_rig": "_fit"}.get(name)
+    if module is not None:
+        return getattr(import_module(f".{module}", __name__), name)
     raise AttributeError(f"module 'amb_fast.calibration' has no attribute {name!r}")

@@ -15,23 +15,16 @@ from scipy import optimize
 
 from .._blas import one_blas_thread
 from .._equality import ArrayRecord
-from .._linear import (
-    AnyController,
-    closed_loop_poles,
-    effective_coefficients,
-    is_controller,
-    iso_zone,
-    predict,
-    sensitivity,
-    stability_margin,
-)
+from .._linear import AnyController, closed_loop_poles, effective_coefficients, iso_zone, sensitivity, stability_margin
 from .._params import PID, Rig
 from .._sweep import RIG_FIELDS, point_model
 from .._sweep_result import unit_of
 from ..controllers import save_controller
+from ._problem import _actual, _check_controller, _check_rig, _names
 
 GAINS = ("kp", "ki", "kd")
 _GRID_POINTS = 1500  # sensitivity grid of the constraint during the search (the result is checked on 20000)
+_NYQUIST_FRACTION = 0.999  # a block frequency's upper limit, as a fraction of fs/2
 
 
 @dataclass(frozen=True, eq=False)
@@ -102,14 +95,20 @@ class Design(ArrayRecord):
             f"{self.freq.size} frequencies {self.freq.min():g}-{self.freq.max():g} Hz, basis {self.basis!r})"
         )
 
+    def _misses(self) -> list[tuple[str, float, np.ndarray, str]]:
+        """(name, rms miss, target, unit) of each target the design has."""
+        both = (("stiffness", self.k_miss, self.k_target, "N/m"), ("damping", self.c_miss, self.c_target, "N s/m"))
+        return [(name, miss, target, unit) for name, miss, target, unit in both if target is not None]
+
+    def _reached(self) -> str:
+        if self.stable:
+            return f"the lowest sensitivity peak reached is {self.peak_sensitivity:.3f}"
+        return "no stable design was reached"
+
     def misses_text(self) -> str:
         """How far the actual coefficients miss their targets (rms), for the targets the design has:
         ``"stiffness misses by 288.8 N/m rms"``; never a NaN for a target that is not set."""
-        parts = [f"{name} misses by {miss:.4g} {unit} rms"
-                 for name, miss, target, unit in (("stiffness", self.k_miss, self.k_target, "N/m"),
-                                                  ("damping", self.c_miss, self.c_target, "N s/m"))
-                 if target is not None]  # fmt: skip
-        return " and ".join(parts)
+        return " and ".join(f"{name} misses by {miss:.4g} {unit} rms" for name, miss, _, unit in self._misses())
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the designed controller to a TOML controller file that :func:`amb_fast.load_controller`
@@ -133,39 +132,34 @@ class Design(ArrayRecord):
                        f"{self.c[i]:10.4g} {self.c_effective[i]:10.4g}")  # fmt: skip
         out.append("(N/m, N s/m; actual: on the rig with its lags; eff: paper eq. 5)")
         out.append("")
-        for name, miss, target, unit in (("stiffness", self.k_miss, self.k_target, "N/m"),
-                                         ("damping", self.c_miss, self.c_target, "N s/m")):  # fmt: skip
-            if target is not None:
-                scale = float(np.sqrt(np.mean(target**2)))
-                rel = f" ({100 * miss / scale:.3g} % of the target)" if scale > 0 else ""
-                out.append(f"{name:<10} misses by {miss:.4g} {unit} rms{rel}")
+        for name, miss, target, unit in self._misses():
+            scale = _rms(target)
+            rel = f" ({100 * miss / scale:.3g} % of the target)" if scale > 0 else ""
+            out.append(f"{name:<10} misses by {miss:.4g} {unit} rms{rel}")
         zone = iso_zone(self.peak_sensitivity) if self.stable else "unstable"
         limit = f" (limit {self.max_sensitivity:g})" if self.max_sensitivity is not None else ""
         out.append(f"sensitivity peak |S| = {self.peak_sensitivity:.3f}{limit}, ISO 14839-3 zone {zone}")
         if not self.feasible:
             what = "stable" if self.max_sensitivity is None else f"stable with |S| <= {self.max_sensitivity:g}"
-            reached = (f"the lowest sensitivity peak reached is {self.peak_sensitivity:.3f}" if self.stable
-                       else "no stable design was reached")  # fmt: skip
             out.append(f"NO FEASIBLE DESIGN: no values of {', '.join(self.params)} found that make the loop {what}; "
-                       f"{reached} (this design); free more parameters or relax the limit")  # fmt: skip
+                       f"{self._reached()} (this design); free more parameters or relax the limit")  # fmt: skip
         elif self.constrained:
             out.append(
                 "the targets are not feasible: the unconstrained optimum (objective "
                 f"{self.unconstrained_residual:.4g}) is unstable or over the sensitivity limit; this is the best "
                 f"feasible design (objective {self.residual:.4g})"
             )
-        if (
-            self.feasible
-            and np.isfinite(self.start_peak)
-            and self.max_sensitivity is not None
-            and self.start_peak > self.max_sensitivity
-        ):
+        if self.feasible and self.max_sensitivity is not None and self.max_sensitivity < self.start_peak < np.inf:
             out.append(f"the start controller's sensitivity peak {self.start_peak:.3f} is over the limit: the design "
                        "started from a feasible point found by minimising the peak from it")  # fmt: skip
         if self.feasible and not self.constrained and self.residual > 1e-3:
             out.append("the targets cannot be met exactly by these parameters: best fit, objective "
                        f"{self.residual:.4g} (rms weighted relative miss)")  # fmt: skip
         return "\n".join(out)
+
+
+def _rms(values: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(values**2)))
 
 
 def _values(controller: AnyController, names: Sequence[str]) -> dict[str, float]:
@@ -257,10 +251,8 @@ def design_controller(
     feasible) towards it as far as the limits allow, then minimises with the limits as constraints
     (SLSQP): the best feasible design, and the report says by how much it misses.
     """
-    if not isinstance(rig, Rig):
-        raise ValueError(f"rig must be an amb_fast.Rig, got {type(rig).__name__}")
-    if not is_controller(controller):
-        raise ValueError(f"controller must be a PID or an amb_fast.Controller, got {type(controller).__name__}")
+    _check_rig(rig)
+    _check_controller(controller, "controller")
     f = np.asarray(freq, dtype=float)
     if f.ndim != 1 or f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0) or np.any(f >= controller.fs / 2):
         raise ValueError(f"freq must be a 1-D array of frequencies in (0, {controller.fs / 2:g}) Hz, got {freq!r}")
@@ -269,27 +261,21 @@ def design_controller(
     k_target, c_target = _target("stiffness", stiffness, f), _target("damping", damping, f)
     if k_target is None and c_target is None:
         raise ValueError("stiffness and damping are both None: give at least one target")
-    if isinstance(free, str):
-        free = [n.strip() for n in free.split(",") if n.strip()]
+    free = _names(free)
     names = list(free)
     if not names or len(set(names)) != len(names):
         raise ValueError(f"free must name one or more distinct controller parameters, got {free!r}")
     start = _values(controller, names)
     if max_sensitivity is not None and not (np.isfinite(max_sensitivity) and max_sensitivity > 1):
         raise ValueError(f"max_sensitivity must be a number > 1 (|S| peak), got {max_sensitivity!r}")
-    wk: Any = 1.0
-    wc: Any = 1.0
-    if weights is not None:
-        try:
-            wk, wc = weights
-        except (TypeError, ValueError):
-            raise ValueError(f"weights must be a (stiffness weight, damping weight) pair, got {weights!r}") from None
-        wk = _target("weights[0]", wk, f)
-        wc = _target("weights[1]", wc, f)
+    try:
+        given_k, given_c = (1.0, 1.0) if weights is None else weights
+    except (TypeError, ValueError):
+        raise ValueError(f"weights must be a (stiffness weight, damping weight) pair, got {weights!r}") from None
+    wk, wc = _target("weights[0]", given_k, f), _target("weights[1]", given_c, f)
     w = 2 * np.pi * f
-    sk = float(np.sqrt(np.mean(k_target**2))) if k_target is not None else 1.0
-    sc = float(np.sqrt(np.mean(c_target**2))) if c_target is not None else 1.0
-    sk, sc = sk or 1.0, sc or 1.0
+    sk = (_rms(k_target) if k_target is not None else 1.0) or 1.0
+    sc = (_rms(c_target) if c_target is not None else 1.0) or 1.0
 
     # Coordinates: gains (and parameters that may change sign) linear, scaled by their start; other
     # positive parameters in log scale.
@@ -305,8 +291,8 @@ def design_controller(
     # A block's frequency (notch_freq, low_pass_freq, lead_lag_zero, ...) must stay below the Nyquist
     # frequency (the block is prewarped there): the search keeps it inside that range.
     lower = np.full(len(names), -np.inf)
-    upper = np.array([np.log(_NYQUIST_FRACTION * controller.fs / 2) if lg and _is_frequency(n) else np.inf
-                      for n, lg in zip(names, logs)])  # fmt: skip
+    is_frequency = [lg and n.endswith(("_freq", "_zero", "_pole")) for n, lg in zip(names, logs)]
+    upper = np.where(is_frequency, np.log(_NYQUIST_FRACTION * controller.fs / 2), np.inf)
 
     def values(x: np.ndarray) -> dict[str, float]:
         return {n: float(np.exp(v) if lg else v * s) for n, v, lg, s in zip(names, x, logs, scale)}
@@ -316,23 +302,15 @@ def design_controller(
 
     def coefficients(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         r, ctrl = model(x)
-        if basis == "effective":
-            return effective_coefficients(r, ctrl, f)
-        H = 1.0 / predict(r, ctrl, f)
-        return rig.mass * w**2 + H.real, H.imag / w
+        return effective_coefficients(r, ctrl, f) if basis == "effective" else _actual(r, ctrl, f)
 
     def residuals(x: np.ndarray) -> np.ndarray:
         k, c = coefficients(x)
-        parts = []
-        if k_target is not None:
-            parts.append(wk * (k - k_target) / sk)
-        if c_target is not None:
-            parts.append(wc * (c - c_target) / sc)
-        return np.concatenate(parts)
+        misses = ((wk, k, k_target, sk), (wc, c, c_target, sc))
+        return np.concatenate([wt * (v - target) / s for wt, v, target, s in misses if target is not None])
 
     def objective(x: np.ndarray) -> float:
-        r = residuals(x)
-        return float(np.sqrt(np.mean(r**2)))
+        return _rms(residuals(x))
 
     # Unconstrained optimum: exact when the residuals are affine in x (checked at two other points).
     r0 = residuals(x0)
@@ -354,10 +332,10 @@ def design_controller(
     def peak(x: np.ndarray) -> float:
         return float(np.max(np.abs(sensitivity(*model(x), grid))))
 
-    def feasible(x: np.ndarray, margin: float = 0.0) -> bool:
+    def feasible(x: np.ndarray) -> bool:
         if np.any(x > upper) or radius(x) >= 1.0 - 1e-9:
             return False
-        return max_sensitivity is None or peak(x) <= max_sensitivity * (1.0 - margin)
+        return max_sensitivity is None or peak(x) <= max_sensitivity
 
     x_best, constrained, found = x_star, False, True
     start_peak = peak(x0) if radius(x0) < 1.0 else float("inf")
@@ -386,10 +364,7 @@ def design_controller(
             x_best = x0
 
     r_model, designed = model(x_best)
-    k, c = coefficients(x_best)
-    if basis == "effective":  # report the actual coefficients too: k, c are always the actual ones
-        H = 1.0 / predict(r_model, designed, f)
-        k, c = rig.mass * w**2 + H.real, H.imag / w
+    k, c = _actual(r_model, designed, f)  # the actual ones whatever the basis
     k_eff, c_eff = effective_coefficients(r_model, designed, f)
     margin = stability_margin(r_model, designed)
     if max_sensitivity is not None and margin.peak > max_sensitivity * (1 + 1e-3):
@@ -408,8 +383,8 @@ def design_controller(
         peak_sensitivity=float(margin.peak),
         stable=bool(margin.stable),
         residual=objective(x_best),
-        k_miss=float(np.sqrt(np.mean((k - k_target) ** 2))) if k_target is not None else float("nan"),
-        c_miss=float(np.sqrt(np.mean((c - c_target) ** 2))) if c_target is not None else float("nan"),
+        k_miss=_rms(k - k_target) if k_target is not None else float("nan"),
+        c_miss=_rms(c - c_target) if c_target is not None else float("nan"),
         constrained=constrained,
         unconstrained_residual=objective(x_star),
         exact=exact,
@@ -419,14 +394,9 @@ def design_controller(
         start_peak=start_peak,
     )
     if not found:
-        reached = (
-            f"the lowest sensitivity peak reached is {design.peak_sensitivity:.3f}"
-            if design.stable
-            else "no stable design was reached"
-        )
         limit = "" if max_sensitivity is None else f" with |S| <= {max_sensitivity:g}"
-        warnings.warn(f"design_controller: no values of {', '.join(names)} make the loop stable{limit}; {reached} "
-                      "(Design.feasible is False)", UserWarning, stacklevel=3)  # fmt: skip
+        warnings.warn(f"design_controller: no values of {', '.join(names)} make the loop stable{limit}; "
+                      f"{design._reached()} (Design.feasible is False)", UserWarning, stacklevel=3)  # fmt: skip
     return design
 
 
@@ -435,14 +405,6 @@ def _zero_scale(name: str, start: dict[str, float], w: np.ndarray) -> float:
     kp = abs(start.get("kp", 0.0)) or 1000.0
     wm = float(np.sqrt(w.min() * w.max()))
     return {"kp": kp, "ki": kp * wm, "kd": kp / wm}.get(name, 1.0)
-
-
-_NYQUIST_FRACTION = 0.999  # a block frequency's upper limit, as a fraction of fs/2
-
-
-def _is_frequency(name: str) -> bool:
-    """A block's frequency parameter (Hz), prewarped and so below the Nyquist frequency."""
-    return name.endswith(("_freq", "_zero", "_pole"))
 
 
 def _feasible_start(

@@ -24,8 +24,10 @@ from ._problem import (
     _as_list,
     _bounds,
     _check_controller,
+    _check_rig,
     _data,
     _free_start,
+    _jacobian,
     _Model,
     _Space,
     same_controller,
@@ -102,8 +104,7 @@ def fit_rig(
     squares). The test suite checks that these p-values are uniform for a correct model. A model with
     ``p < 1e-3`` is reported as a misfit, with a ``UserWarning``.
     """
-    if not isinstance(rig, Rig):
-        raise ValueError(f"rig must be an amb_fast.Rig, got {type(rig).__name__}")
+    _check_rig(rig)
     est_list = _as_list(estimates, lambda v: hasattr(v, "H"))
     if not est_list:
         raise ValueError("estimates must hold at least one Estimate, got none")
@@ -121,27 +122,17 @@ def fit_rig(
 
     model_H = _Model(data)
 
+    def normalized(x: np.ndarray) -> list[np.ndarray]:
+        """Per estimate, (measured - model) H over the line's standard error, complex."""
+        return [(d.H - H) / d.sigma for d, H in zip(data, model_H(space.rig(rig, x)))]
+
     def residuals(x: np.ndarray) -> np.ndarray:
-        parts = []
-        for d, H in zip(data, model_H(space.rig(rig, x))):
-            e = (d.H - H) / d.sigma
-            parts += [e.real, e.imag]
-        return np.concatenate(parts)
+        return np.concatenate([part for e in normalized(x) for part in (e.real, e.imag)])
 
     result = optimize.least_squares(residuals, x0, bounds=(lower, upper), method="trf", x_scale=1.0,
                                     xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200 * (len(names) + 1))  # fmt: skip
     x = result.x
-    fitted = space.rig(rig, x)
-    r = residuals(x)
-
-    # Jacobian at the solution by central differences (one-sided at a bound).
-    J = np.empty((r.size, len(names)))
-    for j in range(len(names)):
-        h = 1e-6 * max(1.0, abs(x[j]))
-        up, down = x.copy(), x.copy()
-        up[j] = min(x[j] + h, upper[j])
-        down[j] = max(x[j] - h, lower[j])
-        J[:, j] = (residuals(up) - residuals(down)) / (up[j] - down[j])
+    J = _jacobian(residuals, x, lower, upper, 1e-6)
     inflation = np.concatenate([np.full(2 * d.freq.size, d.nu / (d.nu - 4.0)) for d in data])
     A_inv = np.linalg.pinv(J.T @ J)
     cov_x = A_inv @ (J.T * inflation) @ J @ A_inv
@@ -157,14 +148,9 @@ def fit_rig(
     values = space.to_values(x)
 
     # Goodness of fit: each line's F(2, nu) statistic mapped to chi-square(2).
+    errors = normalized(x)
     chi2 = 0.0
-    normalized: list[np.ndarray] = []
-    offset = 0
-    for d in data:
-        n = d.freq.size
-        e = r[offset : offset + n] + 1j * r[offset + n : offset + 2 * n]
-        offset += 2 * n
-        normalized.append(e)
+    for d, e in zip(data, errors):
         T = 0.5 * np.abs(e) ** 2
         chi2 += float(np.sum(d.nu * np.log1p(2.0 * T / d.nu)))
     lines = sum(d.freq.size for d in data)
@@ -172,7 +158,7 @@ def fit_rig(
     p_value = float(stats.chi2.sf(chi2, dof)) if dof > 0 else float("nan")
 
     fit = RigFit(
-        rig=fitted,
+        rig=space.rig(rig, x),
         names=names,
         values={n: float(v) for n, v in zip(names, values)},
         std={n: float(s) for n, s in zip(names, std_si)},
@@ -182,7 +168,7 @@ def fit_rig(
         chi2=chi2,
         dof=dof,
         p_value=p_value,
-        normalized_residuals=tuple(normalized),
+        normalized_residuals=tuple(errors),
         units={n: FITTABLE[n][1] for n in names},
         lines=lines,
         estimates=len(data),

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .._linear import controller_matrices, is_controller, plant_responses, state_response, transducer_response
+from .._linear import controller_matrices, is_controller, plant_responses, predict, state_response, transducer_response
 from .._params import Rig
 from ..controllers import as_controller
 
@@ -57,22 +57,49 @@ class _Space:
         return replace(base, **changes)
 
 
+def _check_rig(rig: Any) -> None:
+    if not isinstance(rig, Rig):
+        raise ValueError(f"rig must be an amb_fast.Rig, got {type(rig).__name__}")
+
+
 def _check_controller(controller: Any, name: str) -> None:
     if not is_controller(controller):
         raise ValueError(f"{name} must be a PID or an amb_fast.Controller, got {type(controller).__name__}")
 
 
 def _as_list(value: Any, kind: Callable[[Any], bool]) -> list[Any]:
-    if kind(value):
-        return [value]
-    if isinstance(value, (list, tuple)):
-        return list(value)
-    return [value]
+    return list(value) if isinstance(value, (list, tuple)) and not kind(value) else [value]
+
+
+def _names(free: Any) -> Any:
+    """``free`` with a comma-separated string (as the command line gives it) split into names."""
+    return [n.strip() for n in free.split(",") if n.strip()] if isinstance(free, str) else free
+
+
+def _actual(rig: Rig, controller: Any, freq: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Actual stiffness k (N/m) and damping c (N s/m) at ``freq`` (Hz), as an estimate computes them from
+    :func:`amb_fast.predict`: ``k = rig.mass w^2 + Re F/Y``, ``c = Im F/Y / w``."""
+    w = 2 * np.pi * np.asarray(freq, dtype=float)
+    H = 1.0 / predict(rig, controller, freq)
+    return rig.mass * w**2 + H.real, H.imag / w
+
+
+def _jacobian(
+    function: Callable[[np.ndarray], np.ndarray], x: np.ndarray, lower: np.ndarray, upper: np.ndarray, step: float
+) -> np.ndarray:
+    """d function / d x (on a last axis) by central differences of relative ``step``, one-sided at a bound."""
+    columns = []
+    for j in range(x.size):
+        h = step * max(1.0, abs(x[j]))
+        up, down = x.copy(), x.copy()
+        up[j] = min(x[j] + h, upper[j])
+        down[j] = max(x[j] - h, lower[j])
+        columns.append((function(up) - function(down)) / (up[j] - down[j]))
+    return np.stack(columns, axis=-1)
 
 
 def _free_start(rig: Rig, free: Sequence[str] | Mapping[str, float]) -> dict[str, float]:
-    if isinstance(free, str):
-        free = [n.strip() for n in free.split(",") if n.strip()]
+    free = _names(free)
     if not isinstance(free, (Mapping, Sequence)) or len(free) == 0:
         raise ValueError(f"free must name at least one rig field ({', '.join(FITTABLE)}), got {free!r}")
     names = list(free)
@@ -106,18 +133,11 @@ def _bounds(space: _Space, start: dict[str, float], bounds: Mapping[str, tuple[f
     for name, kind, scale in zip(space.names, space.kinds, space.scales):
         # Default limits keep the optimiser out of the flat regions where a stage stops acting (a lag
         # far above the band, a transducer no longer AC coupled), where it could stall.
-        if name.endswith("_bandwidth"):
-            lo, hi = 0.0, max(20 * fs, 2 * start[name])
-        elif name == "force_coupling_tau":
-            lo, hi = 0.0, max(1e3, 2 * start[name])
-        elif name == "dead_time":
-            lo, hi = 0.0, max(100 / fs, 2 * start[name])
-        elif kind == "log":
-            lo, hi = 0.0, np.inf
-        elif name == "kyy":
+        if name == "kyy":
             lo, hi = (-np.inf, 0.0) if start[name] < 0 else (0.0, np.inf)
         else:
-            lo, hi = 0.0, np.inf
+            ceiling = {"force_coupling_tau": 1e3, "dead_time": 100 / fs}.get(name, np.inf)
+            lo, hi = 0.0, max(20 * fs if name.endswith("_bandwidth") else ceiling, 2 * start[name])
         if bounds is not None and name in bounds:
             try:
                 given_lo, given_hi = (float(b) for b in bounds[name])

@@ -18,7 +18,7 @@ from .._equality import ArrayRecord
 from .._linear import AnyController, predict
 from .._params import Rig
 from .._toml import save_rig
-from ._problem import _check_controller, _Space
+from ._problem import _actual, _check_controller, _jacobian, _Space
 
 CORRELATED = 0.9  # |correlation| above which two parameters are named as not separately identifiable
 MISFIT_P = 1e-3  # p-value below which the model is said not to fit
@@ -93,15 +93,7 @@ class RigFit(ArrayRecord):
         """``evaluate`` at the fitted rig and its standard error from the parameter covariance (central
         differences in the fit's scale, one-sided at a bound). ``evaluate`` returns a real (q, n) array."""
         centre = evaluate(self.rig)
-        J = np.empty((*centre.shape, len(self.names)))
-        for j in range(len(self.names)):
-            h = 1e-5 * max(1.0, abs(self._x[j]))
-            up, down = self._x.copy(), self._x.copy()
-            up[j] = min(self._x[j] + h, self._upper[j])
-            down[j] = max(self._x[j] - h, self._lower[j])
-            J[..., j] = (evaluate(self._space.rig(self.rig, up)) - evaluate(self._space.rig(self.rig, down))) / (
-                up[j] - down[j]
-            )
+        J = _jacobian(lambda x: evaluate(self._space.rig(self.rig, x)), self._x, self._lower, self._upper, 1e-5)
         var = np.einsum("...i,ij,...j->...", J, self._cov_x, J)
         return centre, np.sqrt(np.maximum(var, 0.0))
 
@@ -127,13 +119,7 @@ class RigFit(ArrayRecord):
         ``c = Im F/Y / w``; mass loading and the transducer's coupling included), with standard errors
         ``k_std``, ``c_std`` propagated from the parameter covariance."""
         _check_controller(controller, "controller")
-        w = 2 * np.pi * np.asarray(freq, dtype=float)
-
-        def evaluate(rig: Rig) -> np.ndarray:
-            H = 1.0 / predict(rig, controller, freq)
-            return np.stack([rig.mass * w**2 + H.real, H.imag / w])
-
-        (k, c), (k_std, c_std) = self._propagate(evaluate)
+        (k, c), (k_std, c_std) = self._propagate(lambda rig: np.stack(_actual(rig, controller, freq)))
         return k, c, k_std, c_std
 
     def save(self, path: str | os.PathLike[str]) -> Path:
@@ -168,11 +154,9 @@ class RigFit(ArrayRecord):
         else:
             out += ["", f"goodness of fit     chi2 = {self.chi2:.1f} for {self.dof} degrees of freedom "
                         f"(chi2/dof = {self.chi2 / self.dof:.3f}), p = {self.p_value:.3g}"]  # fmt: skip
-        if self.dof <= 0:
-            pass
-        elif self.fits:
+        if self.dof > 0 and self.fits:
             out.append("                    the model is consistent with the data")
-        else:
+        elif self.dof > 0:
             out.append(
                 f"                    MISFIT: the model cannot fit the data (p < {MISFIT_P:g}): an effect the "
                 "model leaves out (a lag, a stage switched off, a non-linearity) or standard errors that are "

@@ -7,11 +7,9 @@ to current command in A), its constructors (``Controller.from_tf``, ``from_zpk``
 :func:`pid_controller`), their combination (:func:`series`, :func:`parallel`, ``*``, ``+``) and the
 controller file format (:func:`load_controller`). See ``docs/controllers.md``.
 
-Modules: ``_controller`` (the class: its contract, parameters and algebra; :func:`series`,
-:func:`parallel`, :func:`gain`, :func:`pure_delay`), ``_constructors`` (the constructors from raw
-representations, ``Controller.from_tf`` ... ``from_control``, which the class inherits), ``_statespace``
-(realisations as state spaces and the discretisation of continuous designs), ``_blocks`` (the blocks of
-the field), ``_file`` (controller files).
+Modules: ``_controller`` (the class: its constructors, contract, parameters and algebra; :func:`series`,
+:func:`parallel`, :func:`gain`, :func:`pure_delay`), ``_statespace`` (realisations as state spaces and the
+discretisation of continuous designs), ``_blocks`` (the blocks of the field), ``_file`` (controller files).
 """
 
 from __future__ import annotations

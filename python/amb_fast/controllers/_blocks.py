@@ -10,7 +10,7 @@ import numpy as np
 
 from .._validate import integer, real, require
 from ._controller import _REBUILDERS, Controller
-from ._statespace import MAX_ORDER, _discretise
+from ._statespace import MAX_ORDER, _below_nyquist, _discretise
 
 if TYPE_CHECKING:
     from .._params import PID
@@ -19,18 +19,11 @@ SQRT_HALF = math.sqrt(0.5)
 
 
 def _block(
-    kind: str,
-    num: np.ndarray | list[float],
-    den: np.ndarray | list[float],
-    fs: float,
-    prewarp: float | None,
-    local: dict[str, float],
-    fixed: tuple = (),
+    kind: str, num: list[float], den: list[float], fs: float, prewarp: float, local: dict[str, float], fixed: tuple = ()
 ) -> Controller:
-    """A block: the continuous prototype ``num/den`` discretised by Tustin, prewarped at ``prewarp``."""
+    """A block: the continuous prototype ``num/den`` discretised by Tustin, prewarped at ``prewarp`` (Hz)."""
     real("fs", fs, "Hz", positive=True)
-    if prewarp is not None:
-        require(prewarp < fs / 2, "freq", prewarp, f"below the Nyquist frequency {fs / 2} Hz")
+    _below_nyquist("freq", prewarp, fs)
     n, d = np.asarray(num, dtype=float), np.asarray(den, dtype=float)
     ss = _discretise(n, d, float(fs), "tustin", prewarp)
     return Controller._make(
@@ -58,8 +51,8 @@ def lead_lag(gain: float = 1.0, zero: float = 100.0, pole: float = 1000.0, fs: f
     """
     k = real("gain", gain, "DC gain")
     fz, fp = real("zero", zero, "Hz", positive=True), real("pole", pole, "Hz", positive=True)
-    require(fz < fs / 2, "zero", zero, f"below the Nyquist frequency {fs / 2} Hz")
-    require(fp < fs / 2, "pole", pole, f"below the Nyquist frequency {fs / 2} Hz")
+    _below_nyquist("zero", fz, fs)
+    _below_nyquist("pole", fp, fs)
     wz, wp = 2 * math.pi * fz, 2 * math.pi * fp
     local = {"gain": k, "zero": fz, "pole": fp}
     return _block("lead_lag", [k / wz, k], [1 / wp, 1.0], fs, math.sqrt(fz * fp), local)
@@ -162,8 +155,8 @@ def second_order(
         Sampling frequency, Hz.
     """
     fn, fd = real("num_freq", num_freq, "Hz", positive=True), real("den_freq", den_freq, "Hz", positive=True)
-    require(fn < fs / 2, "num_freq", num_freq, f"below the Nyquist frequency {fs / 2} Hz")
-    require(fd < fs / 2, "den_freq", den_freq, f"below the Nyquist frequency {fs / 2} Hz")
+    _below_nyquist("num_freq", fn, fs)
+    _below_nyquist("den_freq", fd, fs)
     zn, zd = real("num_damping", num_damping, "damping ratio"), real("den_damping", den_damping, "damping ratio")
     k = real("gain", gain, "DC gain")
     wn, wd = 2 * math.pi * fn, 2 * math.pi * fd

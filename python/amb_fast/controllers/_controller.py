@@ -1,9 +1,9 @@
 """The :class:`Controller`: a causal SISO discrete LTI controller, its contract, parameters and algebra.
 
-The class (its fields and checks, its state space, transfer function and responses, its named parameters,
-its operators and display), the combinations it is built from (:func:`series`, :func:`parallel`) and the
-blocks without states (:func:`gain`, :func:`pure_delay`). Its constructors from raw representations
-(``from_tf``, ``from_zpk``, ...) are in ``_constructors``, the realisations they use in ``_statespace``.
+The class (its fields and checks, its constructors from raw representations: ``from_tf``, ``from_zpk``,
+..., its state space, transfer function and responses, its named parameters, its operators and display),
+the combinations it is built from (:func:`series`, :func:`parallel`) and the blocks without states
+(:func:`gain`, :func:`pure_delay`). The realisations are in ``_statespace``.
 """
 
 from __future__ import annotations
@@ -18,8 +18,19 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validate import integer, real, require
-from ._constructors import _Constructors
-from ._statespace import MAX_ORDER, Matrices, _delay_ss, _empty, _parallel_ss, _series_ss
+from ._statespace import (
+    MAX_ORDER,
+    Matrices,
+    _conjugate_pairs,
+    _delay_ss,
+    _discretise,
+    _join,
+    _proper_pair,
+    _real_array,
+    _sections_ss,
+    _static,
+    _zpk_ss,
+)
 
 Poly = tuple[float, ...]
 
@@ -36,12 +47,8 @@ def _poly_tuple(poly: ArrayLike) -> Poly:
     return tuple(float(v) for v in np.ravel(poly))
 
 
-def _scale_poly(poly: Poly, factor: float) -> Poly:
-    return tuple(factor * v for v in poly)
-
-
 @dataclass(frozen=True)
-class Controller(_Constructors):
+class Controller:
     """A causal SISO discrete LTI controller from measured displacement e (m) to current command (A).
 
     ``x[k+1] = A x[k] + B e[k]``, ``u[k] = C x[k] + D e[k]``, and the command ``i[k] = u[k - delay]``:
@@ -105,32 +112,13 @@ class Controller(_Constructors):
     # ---- construction from matrices
     @classmethod
     def _make(
-        cls,
-        ss: Matrices,
-        fs: float,
-        delay: int,
-        *,
-        continuous: tuple[ArrayLike, ArrayLike] | None = None,
-        kind: str = "ss",
-        local: tuple[tuple[str, float], ...] = (),
-        parts: tuple[Controller, ...] = (),
+        cls, ss: Matrices, fs: float, delay: int, *, continuous: tuple[ArrayLike, ArrayLike] | None = None,
+        kind: str = "ss", local: tuple[tuple[str, float], ...] = (), parts: tuple[Controller, ...] = (),
         fixed: tuple[Any, ...] = (),
-    ) -> Controller:
-        A, B, C, D = ss
+    ) -> Controller:  # fmt: skip
+        A, B, C, D = (_poly_tuple(m) for m in ss)  # fs and delay are checked by __post_init__
         cont = None if continuous is None else (_poly_tuple(continuous[0]), _poly_tuple(continuous[1]))
-        return cls(
-            real("fs", fs, "Hz", positive=True),
-            integer("delay", delay, 0),
-            _poly_tuple(A),
-            _poly_tuple(B),
-            _poly_tuple(C),
-            float(np.asarray(D).reshape(())),
-            cont,
-            kind,
-            local,
-            parts,
-            fixed,
-        )
+        return cls(fs, delay, A, B, C, D[0], cont, kind, local, parts, fixed)
 
     @classmethod
     def _raw(
@@ -140,8 +128,167 @@ class Controller(_Constructors):
         base = cls._make(ss, fs, delay, continuous=continuous)
         return cls._make(ss, fs, delay, continuous=continuous, kind=kind, local=(("gain", 1.0),), fixed=(base,))
 
-    # ---- construction from raw representations: from_tf, from_zpk, from_sos, from_ss, from_continuous and
-    # from_control are inherited from _Constructors (_constructors.py)
+    # ---- construction from raw representations, each a leaf whose one parameter is the multiplier ``gain``
+    @classmethod
+    def from_tf(cls, num: ArrayLike, den: ArrayLike, fs: float, delay: int = 0) -> Controller:
+        """From a z-domain transfer function num(z)/den(z), positive powers, highest first.
+
+        As ``scipy.signal.dlti`` takes it: a shorter ``num`` is padded with leading zeros, so
+        ``num=[1], den=[1, -0.5]`` is ``1/(z - 0.5)``, one sample of lag in the states. The response is
+        ``num(z)/den(z) z^-delay``.
+
+        Parameters
+        ----------
+        num, den : array_like
+            Coefficients; ``num`` no longer than ``den`` after leading zeros (causal), degree <= 24.
+        fs : float
+            Sampling frequency, Hz.
+        delay : int
+            Extra whole-sample computation delay.
+        """
+        n, d = _proper_pair(num, den, "z-domain transfer function")
+        k = float(n[0] / d[0])
+        ss = _zpk_ss(np.roots(n), np.roots(d), k) if k != 0 else _zpk_ss(np.zeros(0), np.roots(d), 0.0)
+        return cls._raw("tf", ss, fs, delay)
+
+    @classmethod
+    def from_zpk(cls, z: ArrayLike, p: ArrayLike, k: float, fs: float, delay: int = 0) -> Controller:
+        """From zeros ``z``, poles ``p`` (z-plane, real or in conjugate pairs, ``len(z) <= len(p) <= 24``)
+        and gain ``k``: ``k prod(z - z_i) / prod(z - p_j) z^-delay``; ``fs`` in Hz."""
+        zeros, poles = (np.atleast_1d(np.asarray(v, dtype=complex)) for v in (z, p))
+        for name, roots, given in (("z", zeros, z), ("p", poles, p)):
+            require(roots.ndim == 1 and bool(np.all(np.isfinite(roots))), name, given, "a 1-D sequence of finite roots")
+            _conjugate_pairs(name, roots, given)
+        require(zeros.size <= poles.size, "z", z, f"no more zeros than poles ({poles.size}): otherwise non-causal")
+        if poles.size > MAX_ORDER:
+            raise ValueError(f"p must be at most {MAX_ORDER} poles (the largest controller order), got {poles.size}")
+        return cls._raw("zpk", _zpk_ss(zeros, poles, real("k", k, "gain")), fs, delay)
+
+    @classmethod
+    def from_sos(cls, sos: ArrayLike, fs: float, delay: int = 0) -> Controller:
+        """From second-order sections in series (rows ``b0 b1 b2 a0 a1 a2``, ``scipy.signal`` layout),
+        realised section by section; ``fs`` in Hz. Each row is ``(b0 z^2 + b1 z + b2) / (a0 z^2 + a1 z +
+        a2)``, the same as in powers of z^-1; ``a0 != 0``, or ``b0 = a0 = 0`` for a first-order section
+        (as ``scipy.signal.zpk2sos(..., pairing="minimal")`` writes them)."""
+        try:
+            array = np.atleast_2d(np.asarray(sos, dtype=float))
+        except (TypeError, ValueError):
+            raise ValueError(f"sos must be an array of shape (sections, 6), got {sos!r}") from None
+        require(array.ndim == 2 and array.shape[1] == 6 and array.shape[0] > 0, "sos", sos, "of shape (sections, 6)")
+        require(bool(np.all(np.isfinite(array))), "sos", sos, "finite (no NaN or inf)")
+        lead = [int(np.argmax(row[3:] != 0)) if np.any(row[3:] != 0) else 3 for row in array]
+        causal = all(k < 3 and not np.any(row[:k]) for k, row in zip(lead, array))
+        require(causal, "sos", sos, "causal in every section: a0 != 0, or b0 = a0 = 0 for a first-order one")
+        ss = _sections_ss([(row[:3], row[3:]) for row in array])
+        if ss[0].shape[0] > MAX_ORDER:
+            raise ValueError(f"sos must be of total order <= {MAX_ORDER}, got order {ss[0].shape[0]}")
+        return cls._raw("sos", ss, fs, delay)
+
+    @classmethod
+    def from_ss(cls, A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike, fs: float, delay: int = 0) -> Controller:
+        """From a discrete state space (kept as given): A (n, n), B (n, 1), C (1, n), D (1, 1); a 1-D B or
+        C and a scalar D are read as a column, a row and 1x1. n <= 24; ``fs`` in Hz."""
+        arrays = {}
+        for name, value in (("A", A), ("B", B), ("C", C), ("D", D)):
+            arrays[name] = _real_array(name, value, "a real matrix")
+            require(bool(np.all(np.isfinite(arrays[name]))), name, value, "finite (no NaN or inf)")
+        a = arrays["A"].reshape(0, 0) if arrays["A"].size == 0 else np.atleast_2d(arrays["A"])
+        require(a.ndim == 2 and a.shape[0] == a.shape[1], "A", A, "square")
+        n = a.shape[0]
+        if n > MAX_ORDER:
+            raise ValueError(f"A must be of order <= {MAX_ORDER} (the largest controller order), got order {n}")
+        b, c, d = arrays["B"], arrays["C"], arrays["D"]
+        b = b.reshape(n, 1) if b.ndim == 1 and b.size == n else b.reshape(0, 1) if n == 0 else b
+        c = c.reshape(1, n) if c.ndim == 1 and c.size == n else c.reshape(1, 0) if n == 0 else c
+        d = d.reshape(1, 1) if d.size == 1 else d
+        require(b.shape == (n, 1), "B", B, f"of shape ({n}, 1): one input (a SISO controller)")
+        require(c.shape == (1, n), "C", C, f"of shape (1, {n}): one output (a SISO controller)")
+        require(d.shape == (1, 1), "D", D, "a scalar or of shape (1, 1) (a SISO controller)")
+        return cls._raw("ss", (a, b, c, d), fs, delay)
+
+    @classmethod
+    def from_continuous(
+        cls,
+        num: ArrayLike,
+        den: ArrayLike,
+        fs: float,
+        method: str = "tustin",
+        prewarp: float | None = None,
+        delay: int = 0,
+    ) -> Controller:
+        """Discretise a proper continuous design num(s)/den(s) (highest power first), and remember it.
+
+        Parameters
+        ----------
+        num, den : array_like
+            Coefficients in s; ``num`` no longer than ``den`` (proper), degree <= 24.
+        fs : float
+            Sampling frequency, Hz.
+        method : {"tustin", "zoh", "matched"}
+            Bilinear (Tustin); zero-order hold (exact for a held input); matched pole-zero
+            (z = exp(sT) for every finite pole and zero, no zeros added at z = -1, DC gain matched,
+            roots at s = 0 matched as s <-> (z - 1)/T), as python-control's "matched".
+        prewarp : float or None
+            Tustin only: the frequency, Hz (< fs/2), where the discrete response equals the continuous
+            one exactly (s = 2 fw (z-1)/(z+1), fw = pi f0 / tan(pi f0/fs)).
+        delay : int
+            Whole-sample computation delay (not part of the continuous design).
+        """
+        real("fs", fs, "Hz", positive=True)
+        integer("delay", delay, 0)
+        n, d = _proper_pair(num, den, "continuous transfer function")
+        return cls._raw("continuous", _discretise(n, d, float(fs), method, prewarp), fs, delay, (n, d))
+
+    @classmethod
+    def from_control(
+        cls,
+        sys: Any,
+        fs: float | None = None,
+        method: str = "tustin",
+        prewarp: float | None = None,
+        delay: int = 0,
+    ) -> Controller:
+        """From a python-control ``TransferFunction`` or ``StateSpace`` (SISO; needs the ``bench`` extra).
+
+        A discrete ``sys`` keeps its coefficients: its ``dt`` must equal ``1/fs`` (``fs`` is taken from
+        ``dt`` when None). A continuous one (``dt`` 0 or None) is discretised at ``fs`` by ``method`` and
+        ``prewarp`` (Hz), as :meth:`from_continuous`, and remembered.
+        """
+        try:
+            import control
+        except ImportError:  # pragma: no cover - the optional extra
+            raise ImportError("Controller.from_control needs python-control: pip install 'amb_fast[bench]'") from None
+        require(
+            isinstance(sys, (control.TransferFunction, control.StateSpace)),
+            "sys",
+            sys,
+            "a python-control TransferFunction or StateSpace",
+        )
+        require(sys.ninputs == 1 and sys.noutputs == 1, "sys", sys, "SISO (one input, one output), not MIMO")
+        dt = sys.dt
+        discrete = dt is not None and dt is not False and dt != 0
+        if discrete:
+            if dt is True:
+                require(fs is not None, "fs", fs, "given when sys.dt is True (unspecified sampling time)")
+            elif fs is None:
+                fs = 1.0 / float(dt)
+            else:
+                real("fs", fs, "Hz", positive=True)
+                require(math.isclose(float(dt), 1.0 / fs, rel_tol=1e-12), "dt", dt, f"1/fs = {1.0 / fs!r} s")
+            assert fs is not None
+            if isinstance(sys, control.StateSpace):
+                return cls.from_ss(sys.A, sys.B, sys.C, sys.D, fs, delay)
+            return cls.from_tf(sys.num[0][0], sys.den[0][0], fs, delay)
+        require(fs is not None, "fs", fs, "given for a continuous sys (the sampling frequency to discretise at, Hz)")
+        assert fs is not None
+        if isinstance(sys, control.StateSpace):
+            from scipy import signal  # on first use: importing it takes half a second
+
+            num, den = signal.ss2tf(sys.A, sys.B, sys.C, sys.D)
+            num = num[0]
+        else:
+            num, den = sys.num[0][0], sys.den[0][0]
+        return cls.from_continuous(num, den, fs, method, prewarp, delay)
 
     # ---- the contract
     @property
@@ -255,58 +402,44 @@ class Controller(_Constructors):
         return self._reassemble(iter(rebuilt))
 
     def _reassemble(self, leaves: Any) -> Controller:
-        if self._kind == "series":
-            return series(*(part._reassemble(leaves) for part in self._parts))
-        if self._kind == "parallel":
-            return parallel(*(part._reassemble(leaves) for part in self._parts))
+        if self._kind in ("series", "parallel"):
+            return _combine([part._reassemble(leaves) for part in self._parts], self._kind)
         leaf: Controller = next(leaves)
         return leaf
 
-    # ---- algebra
-    def __mul__(self, other: Any) -> Controller:
-        other = _converted(other)  # a PID composes as its Controller
+    # ---- algebra: a number is a gain block at this fs; a PID composes as its Controller
+    def _operand(self, other: Any) -> Controller | None:
+        other = _converted(other)
         if isinstance(other, Controller):
-            return series(self, other)
-        if isinstance(other, Real) and not isinstance(other, bool):
-            return series(self, gain(float(other), self.fs))
-        return NotImplemented
+            return other
+        return gain(float(other), self.fs) if _is_number(other) else None
+
+    def __mul__(self, other: Any) -> Controller:
+        block = self._operand(other)
+        return NotImplemented if block is None else series(self, block)
 
     def __rmul__(self, other: Any) -> Controller:
-        other = _converted(other)
-        if isinstance(other, Controller):
-            return series(other, self)
-        if isinstance(other, Real) and not isinstance(other, bool):
-            return series(gain(float(other), self.fs), self)
-        return NotImplemented
+        block = self._operand(other)
+        return NotImplemented if block is None else series(block, self)
 
     def __add__(self, other: Any) -> Controller:
-        other = _converted(other)
-        if isinstance(other, Controller):
-            return parallel(self, other)
-        if isinstance(other, Real) and not isinstance(other, bool) and other == 0:
+        if _is_number(other) and other == 0:
             return self  # so that sum(controllers) works
-        if isinstance(other, Real) and not isinstance(other, bool):
-            return parallel(self, gain(float(other), self.fs))
-        return NotImplemented
+        block = self._operand(other)
+        return NotImplemented if block is None else parallel(self, block)
 
     def __radd__(self, other: Any) -> Controller:
-        other = _converted(other)
-        if isinstance(other, Controller):
-            return parallel(other, self)
-        if isinstance(other, Real) and not isinstance(other, bool) and other == 0:
+        if _is_number(other) and other == 0:
             return self
-        if isinstance(other, Real) and not isinstance(other, bool):
-            return parallel(gain(float(other), self.fs), self)
-        return NotImplemented
+        block = self._operand(other)
+        return NotImplemented if block is None else parallel(block, self)
 
     def __neg__(self) -> Controller:
         return -1.0 * self
 
     def __sub__(self, other: Any) -> Controller:
         other = _converted(other)
-        if isinstance(other, (Controller, Real)) and not isinstance(other, bool):
-            return self + (-1.0) * other
-        return NotImplemented
+        return self + (-1.0) * other if isinstance(other, Controller) or _is_number(other) else NotImplemented
 
     # ---- display
     def _describe(self, top: bool = False) -> str:
@@ -330,13 +463,9 @@ class Controller(_Constructors):
 def as_controller(value: Any, name: str) -> Controller:
     """``value`` as a :class:`Controller`: a Controller as it is, a PID (anything with ``to_controller``)
     converted; else a ValueError naming ``name``."""
-    if isinstance(value, Controller):
-        return value
-    convert = getattr(value, "to_controller", None)
-    if callable(convert):
-        converted = convert()
-        if isinstance(converted, Controller):
-            return converted
+    converted = _converted(value)
+    if isinstance(converted, Controller):
+        return converted
     raise ValueError(f"{name} must be a PID or an amb_fast.Controller, got {type(value).__name__}")
 
 
@@ -346,16 +475,8 @@ def _converted(block: Any) -> Any:
     return convert() if not isinstance(block, Controller) and callable(convert) else block
 
 
-def _same_fs(blocks: Sequence[Controller], what: str) -> float:
-    for block in blocks:
-        require(isinstance(block, Controller), "blocks", block, f"Controllers or PIDs (in a {what})")
-    rates = sorted({b.fs for b in blocks})
-    require(len(rates) == 1, "fs", rates, f"the same for every block of a {what}")
-    return rates[0]
-
-
-def _flatten(blocks: Sequence[Controller], kind: str) -> tuple[Controller, ...]:
-    return tuple(p for b in blocks for p in (b._parts if b._kind == kind else (b,)))
+def _is_number(value: Any) -> bool:
+    return isinstance(value, Real) and not isinstance(value, bool)
 
 
 def _polymul(a: ArrayLike, b: ArrayLike) -> np.ndarray:
@@ -370,30 +491,48 @@ def _polymul(a: ArrayLike, b: ArrayLike) -> np.ndarray:
     return np.convolve(trimmed(a), trimmed(b))
 
 
+def _combine(blocks: Sequence[Controller], kind: str) -> Controller:
+    """The blocks (PIDs converted) in series or in parallel, nested combinations of the same kind flattened."""
+    what = "series" if kind == "series" else "parallel connection"
+    require(len(blocks) >= 1, "blocks", blocks, "at least one Controller")
+    blocks = tuple(_converted(b) for b in blocks)
+    for block in blocks:
+        require(isinstance(block, Controller), "blocks", block, f"Controllers or PIDs (in a {what})")
+    rates = sorted({b.fs for b in blocks})
+    require(len(rates) == 1, "fs", rates, f"the same for every block of a {what}")
+    if len(blocks) == 1:
+        return blocks[0]
+    parts = tuple(p for b in blocks for p in (b._parts if b._kind == kind else (b,)))
+    # in parallel, the common delay is the result's; the rest of a branch's is a shift register in series
+    delay = sum(p.delay for p in parts) if kind == "series" else min(p.delay for p in parts)
+    ss: Matrices | None = None
+    for p in parts:
+        part = p.to_ss()
+        if kind == "parallel" and p.delay > delay:
+            part = _join(part, _delay_ss(p.delay - delay), series=True)
+        ss = part if ss is None else _join(ss, part, series=kind == "series")
+    assert ss is not None
+    require(ss[0].shape[0] <= MAX_ORDER, "order", ss[0].shape[0], f"<= {MAX_ORDER} for the {what}")
+    continuous = None
+    if all(p._continuous is not None for p in parts):  # the product or the sum of the continuous designs
+        num, den = (np.ones(1) if kind == "series" else np.zeros(1)), np.ones(1)
+        for p in parts:
+            assert p._continuous is not None
+            pn, pd = p._continuous
+            if kind == "series":
+                num, den = _polymul(num, pn), _polymul(den, pd)
+            else:
+                num, den = np.polyadd(_polymul(num, pd), _polymul(pn, den)), _polymul(den, pd)
+        continuous = (num, den)
+    return Controller._make(ss, fs=rates[0], delay=delay, continuous=continuous, kind=kind, parts=parts)
+
+
 def series(*blocks: Controller) -> Controller:
     """The blocks in series (``a * b * ...``): responses multiply, delays add. Equal ``fs`` required.
 
     The continuous design is kept (the product) when every block has one.
     """
-    require(len(blocks) >= 1, "blocks", blocks, "at least one Controller")
-    blocks = tuple(_converted(b) for b in blocks)
-    fs = _same_fs(blocks, "series")
-    if len(blocks) == 1:
-        return blocks[0]
-    parts = _flatten(blocks, "series")
-    ss = parts[0].to_ss()
-    for part in parts[1:]:
-        ss = _series_ss(ss, part.to_ss())
-    continuous = None
-    if all(p._continuous is not None for p in parts):
-        num: np.ndarray = np.ones(1)
-        den: np.ndarray = np.ones(1)
-        for p in parts:
-            assert p._continuous is not None
-            num, den = _polymul(num, p._continuous[0]), _polymul(den, p._continuous[1])
-        continuous = (num, den)
-    require(ss[0].shape[0] <= MAX_ORDER, "order", ss[0].shape[0], f"<= {MAX_ORDER} for the series")
-    return Controller._make(ss, fs, sum(p.delay for p in parts), continuous=continuous, kind="series", parts=parts)
+    return _combine(blocks, "series")
 
 
 def parallel(*blocks: Controller) -> Controller:
@@ -403,29 +542,7 @@ def parallel(*blocks: Controller) -> Controller:
     branch's delay is realised as extra states (a shift register). The continuous design is kept (the
     sum) when every block has one.
     """
-    require(len(blocks) >= 1, "blocks", blocks, "at least one Controller")
-    blocks = tuple(_converted(b) for b in blocks)
-    fs = _same_fs(blocks, "parallel connection")
-    if len(blocks) == 1:
-        return blocks[0]
-    parts = _flatten(blocks, "parallel")
-    common = min(p.delay for p in parts)
-    ss: Matrices | None = None
-    for p in parts:
-        branch = _series_ss(p.to_ss(), _delay_ss(p.delay - common)) if p.delay > common else p.to_ss()
-        ss = branch if ss is None else _parallel_ss(ss, branch)
-    assert ss is not None
-    continuous = None
-    if all(p._continuous is not None for p in parts):
-        num: np.ndarray = np.zeros(1)
-        den: np.ndarray = np.ones(1)
-        for p in parts:
-            assert p._continuous is not None
-            pn, pd = p._continuous
-            num, den = np.polyadd(_polymul(num, pd), _polymul(pn, den)), _polymul(den, pd)
-        continuous = (num, den)
-    require(ss[0].shape[0] <= MAX_ORDER, "order", ss[0].shape[0], f"<= {MAX_ORDER} for the parallel connection")
-    return Controller._make(ss, fs, common, continuous=continuous, kind="parallel", parts=parts)
+    return _combine(blocks, "parallel")
 
 
 def gain(value: float, fs: float = 4000.0) -> Controller:
@@ -439,21 +556,13 @@ def gain(value: float, fs: float = 4000.0) -> Controller:
         Sampling frequency, Hz.
     """
     k = real("value", value, "gain")
-    A, B, C, _ = _empty()
-    return Controller._make(
-        (A, B, C, np.array([[k]])), fs, 0, continuous=([k], [1.0]), kind="gain", local=(("gain", k),)
-    )
+    return Controller._make(_static(k), fs, 0, continuous=([k], [1.0]), kind="gain", local=(("gain", k),))
 
 
 def pure_delay(samples: int, fs: float = 4000.0) -> Controller:
     """z^-samples: a whole-sample delay with no states and no parameters (continuous prototype 1)."""
     d = integer("samples", samples, 0)
-    A, B, C, _ = _empty()
-    return Controller._make((A, B, C, np.ones((1, 1))), fs, d, continuous=([1.0], [1.0]), kind="delay")
-
-
-def _rebuild_gain(leaf: Controller, **values: float) -> Controller:
-    return gain(values["gain"], leaf.fs)
+    return Controller._make(_static(1.0), fs, d, continuous=([1.0], [1.0]), kind="delay")
 
 
 def _rebuild_raw(leaf: Controller, gain: float) -> Controller:
@@ -462,7 +571,7 @@ def _rebuild_raw(leaf: Controller, gain: float) -> Controller:
     A, B, C, D = base.to_ss()
     continuous = None
     if base._continuous is not None:
-        continuous = (_scale_poly(base._continuous[0], k), base._continuous[1])
+        continuous = (tuple(k * v for v in base._continuous[0]), base._continuous[1])
     return Controller._make(
         (A, B, k * C, k * D),
         base.fs,
@@ -474,6 +583,6 @@ def _rebuild_raw(leaf: Controller, gain: float) -> Controller:
     )
 
 
-_REBUILDERS["gain"] = _rebuild_gain
+_REBUILDERS["gain"] = lambda leaf, **p: gain(p["gain"], leaf.fs)
 for _kind in _RAW_KINDS:
     _REBUILDERS[_kind] = _rebuild_raw

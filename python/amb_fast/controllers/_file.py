@@ -50,26 +50,18 @@ def _pid(fs: float, **keys: Any) -> Controller:
     return pid_controller(PID(**keys, fs=fs, delay=0))
 
 
-# type -> (builder(fs, **keys), required keys, optional keys)
+# type -> (builder(fs=, **keys), required keys, optional keys)
 _TYPES: dict[str, tuple[Callable[..., Controller], tuple[str, ...], tuple[str, ...]]] = {
     "pid": (_pid, ("kp", "ki", "kd"), ("derivative_cutoff",)),
-    "notch": (lambda fs, **k: notch(fs=fs, **k), ("freq",), ("width", "depth")),
-    "low_pass": (lambda fs, **k: low_pass(fs=fs, **k), ("freq",), ("order", "damping")),
-    "lead_lag": (lambda fs, **k: lead_lag(fs=fs, **k), (), ("gain", "zero", "pole")),
-    "second_order": (
-        lambda fs, **k: second_order(fs=fs, **k),
-        ("num_freq", "den_freq"),
-        ("num_damping", "den_damping", "gain"),
-    ),
-    "gain": (lambda fs, **k: gain(fs=fs, **k), ("value",), ()),
-    "tf": (lambda fs, **k: Controller.from_tf(fs=fs, **k), ("num", "den"), ()),
-    "sos": (lambda fs, **k: Controller.from_sos(fs=fs, **k), ("sos",), ()),
-    "continuous": (lambda fs, **k: Controller.from_continuous(fs=fs, **k), ("num", "den"), ("method", "prewarp")),
+    "notch": (notch, ("freq",), ("width", "depth")),
+    "low_pass": (low_pass, ("freq",), ("order", "damping")),
+    "lead_lag": (lead_lag, (), ("gain", "zero", "pole")),
+    "second_order": (second_order, ("num_freq", "den_freq"), ("num_damping", "den_damping", "gain")),
+    "gain": (gain, ("value",), ()),
+    "tf": (Controller.from_tf, ("num", "den"), ()),
+    "sos": (Controller.from_sos, ("sos",), ()),
+    "continuous": (Controller.from_continuous, ("num", "den"), ("method", "prewarp")),
 }
-
-
-def _read(path: Path) -> dict[str, Any]:
-    return read_table(path, "controller file")
 
 
 def load_controller(path: str | os.PathLike[str]) -> Controller:
@@ -79,7 +71,7 @@ def load_controller(path: str | os.PathLike[str]) -> Controller:
     format. Raises ValueError naming the file, the block (counted from 1) and the key.
     """
     file = Path(path)
-    data = _read(file)
+    data = read_table(file, "controller file")
     where = f"controller file {str(file)!r}"
     unknown = sorted(set(data) - {"fs", "delay", "block"})
     if unknown:
@@ -108,7 +100,7 @@ def load_controller(path: str | os.PathLike[str]) -> Controller:
         if missing:
             raise ValueError(f"{here}: missing key(s) {', '.join(missing)}")
         try:
-            built.append(builder(fs, **keys))
+            built.append(builder(fs=fs, **keys))
         except (ValueError, TypeError) as error:
             raise ValueError(f"{here}: {_key_of(error, keys)}{error}") from None
     if delay:
@@ -126,27 +118,16 @@ def _key_of(error: Exception, keys: dict[str, Any]) -> str:
 
 
 # ------------------------------------------------------------------------------------------------- writing
-# block kind -> (file type, {local parameter name: file key}); the order of a low-pass is its first fixed value.
-_WRITTEN: dict[str, tuple[str, dict[str, str]]] = {
-    "pid": ("pid", {"kp": "kp", "ki": "ki", "kd": "kd", "derivative_cutoff": "derivative_cutoff"}),
-    "notch": ("notch", {"freq": "freq", "width": "width", "depth": "depth"}),
-    "low_pass": ("low_pass", {"freq": "freq", "damping": "damping"}),
-    "lead_lag": ("lead_lag", {"gain": "gain", "zero": "zero", "pole": "pole"}),
-    "second_order": ("second_order", {k: k for k in ("num_freq", "den_freq", "num_damping", "den_damping", "gain")}),
-    "gain": ("gain", {"gain": "value"}),
-}
-
-
 def _block_table(leaf: Controller) -> dict[str, Any] | None:
-    """The file block of one leaf, or None for a leaf the format has no named block for."""
-    if leaf._kind not in _WRITTEN:
+    """The file block of one leaf (its parameters under their own names; a gain's is ``value``), or None for
+    a leaf the format has no named block for (a raw representation, a delay)."""
+    if leaf._kind not in ("pid", "notch", "low_pass", "lead_lag", "second_order", "gain"):
         return None
-    kind, keys = _WRITTEN[leaf._kind]
-    table: dict[str, Any] = {"type": kind}
+    table: dict[str, Any] = {"type": leaf._kind}
     for name, value in leaf._local:
         if name == "derivative_cutoff" and value == float("inf"):
             continue  # no derivative filter: the key left out
-        table[keys[name]] = value
+        table["value" if leaf._kind == "gain" else name] = value
     if leaf._kind == "low_pass":
         table["order"] = int(leaf._fixed[0])
     return table
@@ -195,9 +176,9 @@ def recorded_controller(record: Any) -> Any:
 
         return PID(**{k: v for k, v in record.items() if k != "class"})
     if kind == "Controller":
-        n = len(record["_b"])
-        A = np.asarray(record["_a"], dtype=float).reshape(n, n)
-        B = np.asarray(record["_b"], dtype=float).reshape(n, 1)
-        C = np.asarray(record["_c"], dtype=float).reshape(1, n)
-        return Controller.from_ss(A, B, C, float(record["_d"]), fs=record["fs"], delay=record["delay"])
+        n = len(record["_b"])  # the flat tuples of a Controller's fields; B and C 1-D
+        A = np.reshape(np.asarray(record["_a"], dtype=float), (n, n))
+        return Controller.from_ss(
+            A, record["_b"], record["_c"], float(record["_d"]), fs=record["fs"], delay=record["delay"]
+        )
     return None

@@ -65,8 +65,13 @@ def _proper_pair(num: ArrayLike, den: ArrayLike, what: str) -> tuple[np.ndarray,
 
 
 # ---------------------------------------------------------------------------------------------- state spaces
-def _empty() -> Matrices:
-    return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.zeros((1, 1))
+def _static(d: float) -> Matrices:
+    """A static gain ``d``: no states."""
+    return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[d]], dtype=float)
+
+
+def _below_nyquist(name: str, value: float, fs: float) -> None:
+    require(value < fs / 2, name, value, f"below the Nyquist frequency {fs / 2} Hz")
 
 
 def _section_ss(b: np.ndarray, a: np.ndarray) -> Matrices:
@@ -82,74 +87,56 @@ def _section_ss(b: np.ndarray, a: np.ndarray) -> Matrices:
         a, b = a[:-1], b[:-1]
     b, a = b / a[0], a / a[0]
     n = a.size - 1
-    if n == 0:
-        A, B, C, _ = _empty()
-        return A, B, C, np.array([[b[0]]])
-    A = np.zeros((n, n))
-    A[0, :] = -a[1:]
-    A[1:, :-1] += np.eye(n - 1)
-    B = np.zeros((n, 1))
-    B[0, 0] = 1.0
-    C = (b[1:] - b[0] * a[1:])[None, :]
-    return A, B, C, np.array([[b[0]]])
+    A, B, C, D = _static(b[0])
+    if n:
+        A = np.zeros((n, n))
+        A[0, :] = -a[1:]
+        A[1:, :-1] += np.eye(n - 1)
+        B = np.zeros((n, 1))
+        B[0, 0] = 1.0
+        C = (b[1:] - b[0] * a[1:])[None, :]
+    return A, B, C, D
 
 
-def _series_ss(first: Matrices, second: Matrices) -> Matrices:
-    """u -> first -> second -> y."""
+def _join(first: Matrices, second: Matrices, series: bool) -> Matrices:
+    """``first`` then ``second`` in series (u -> first -> second -> y), or the two in parallel."""
     A1, B1, C1, D1 = first
     A2, B2, C2, D2 = second
     n1, n2 = A1.shape[0], A2.shape[0]
     A = np.zeros((n1 + n2, n1 + n2))
     A[:n1, :n1] = A1
+    A[n1:, n1:] = A2
+    if not series:
+        return A, np.vstack([B1, B2]), np.hstack([C1, C2]), D1 + D2
     A[n1:, :n1] = B2 @ C1
-    A[n1:, n1:] = A2
     return A, np.vstack([B1, B2 @ D1]), np.hstack([D2 @ C1, C2]), D2 @ D1
-
-
-def _parallel_ss(first: Matrices, second: Matrices) -> Matrices:
-    A1, B1, C1, D1 = first
-    A2, B2, C2, D2 = second
-    n1, n2 = A1.shape[0], A2.shape[0]
-    A = np.zeros((n1 + n2, n1 + n2))
-    A[:n1, :n1] = A1
-    A[n1:, n1:] = A2
-    return A, np.vstack([B1, B2]), np.hstack([C1, C2]), D1 + D2
 
 
 def _delay_ss(samples: int) -> Matrices:
     """z^-samples as a shift register of ``samples`` states."""
     if samples == 0:
-        A, B, C, _ = _empty()
-        return A, B, C, np.ones((1, 1))
-    A = np.eye(samples, k=-1)
+        return _static(1.0)
     B = np.zeros((samples, 1))
     B[0, 0] = 1.0
     C = np.zeros((1, samples))
     C[0, -1] = 1.0
-    return A, B, C, np.zeros((1, 1))
+    return np.eye(samples, k=-1), B, C, np.zeros((1, 1))
 
 
 def _sections_ss(sections: Sequence[tuple[np.ndarray, np.ndarray]]) -> Matrices:
     """Sections b(z)/a(z) (positive powers, degree <= 2) connected in series."""
-    A, B, C, _ = _empty()
-    ss: Matrices = (A, B, C, np.ones((1, 1)))
+    ss = _static(1.0)
     for b, a in sections:
-        ss = _series_ss(ss, _section_ss(b, a))
+        ss = _join(ss, _section_ss(b, a), series=True)
     return ss
 
 
-def _split(roots: np.ndarray) -> tuple[list[float], list[complex]]:
-    """Real roots (sorted) and the upper members of the complex-conjugate pairs."""
+def _factors(roots: np.ndarray) -> list[list[complex]]:
+    """Roots grouped into quadratic factors (a conjugate pair, or two neighbouring real roots in sorted
+    order) and at most one linear factor (the last)."""
     tol = 1e-10 * np.maximum(1.0, np.abs(roots))
     real_roots = sorted(float(r.real) for r, t in zip(roots, tol) if abs(r.imag) <= t)
-    upper = [complex(r) for r, t in zip(roots, tol) if r.imag > t]
-    return real_roots, upper
-
-
-def _factors(roots: np.ndarray) -> list[list[complex]]:
-    """Roots grouped into quadratic factors (a conjugate pair, or two neighbouring real roots) and at
-    most one linear factor (the last)."""
-    real_roots, upper = _split(roots)
+    upper = [complex(r) for r, t in zip(roots, tol) if r.imag > t]  # the upper member of each conjugate pair
     groups: list[list[complex]] = [[r, r.conjugate()] for r in upper]
     groups += [[real_roots[j], real_roots[j + 1]] for j in range(0, len(real_roots) - 1, 2)]
     if len(real_roots) % 2:
@@ -162,8 +149,7 @@ def _zpk_ss(zeros: np.ndarray, poles: np.ndarray, k: float) -> Matrices:
     poles), each quadratic factor of zeros given to the nearest free pole pair, most resonant first.
     The relative degree is kept: no zeros are added at the origin (unlike ``scipy.signal.tf2sos``)."""
     if poles.size == 0:
-        A, B, C, _ = _empty()
-        return A, B, C, np.array([[k]])
+        return _static(k)
     dens = _factors(poles)
     nums: list[list[complex]] = [[] for _ in dens]
     free = set(range(len(dens)))
@@ -200,7 +186,7 @@ def _discretise(num: np.ndarray, den: np.ndarray, fs: float, method: str, prewar
     if prewarp is not None:
         real("prewarp", prewarp, "Hz", positive=True)
         require(method == "tustin", "prewarp", prewarp, "None unless method='tustin'")
-        require(prewarp < fs / 2, "prewarp", prewarp, f"below the Nyquist frequency {fs / 2} Hz")
+        _below_nyquist("prewarp", prewarp, fs)
     from scipy import signal  # on first use: importing it takes half a second
 
     zeros, poles = np.roots(num), np.roots(den)
