@@ -110,7 +110,7 @@ def test_dask_local_cluster_gives_the_same_sweep(setup) -> None:
     rig, pid, excitation = setup
     kwargs = dict(kp=np.linspace(1800, 2600, 6), kd=[4.0, 6.0], seed=9, periods=3)
     serial = af.sweep(rig, pid, excitation, **kwargs)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
         with distributed.Client(cluster) as client:
             same(serial, af.sweep(rig, pid, excitation, executor=client.get_executor(), chunk_size=3, **kwargs))
 
