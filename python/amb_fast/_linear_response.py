@@ -17,9 +17,9 @@ from ._linear_loop import (
     DesignController,
     closed_loop,
     controller_matrices,
-    discrete_plant,
     is_controller,
-    sensor_row,
+    sampled_plant,
+    sampled_sensor_rows,
 )
 from ._linear_poles import _gain_arrays, closed_loop_poles
 from ._params import PID, Rig
@@ -91,8 +91,8 @@ def transducer_response(rig: Rig, fs: float, z: np.ndarray) -> np.ndarray:
 
 def plant_responses(rig: Rig, fs: float, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Sampled plant responses from force and from current command to the sensor, at ``f`` (Hz)."""
-    Phi, Gamma, states = discrete_plant(rig, fs)
-    response = state_response(Phi, Gamma, sensor_row(states), np.exp(2j * np.pi * f / fs))[0]
+    Phi, Gamma, _ = sampled_plant(rig, fs)
+    response = state_response(Phi, Gamma, sampled_sensor_rows(rig, len(Phi)), np.exp(2j * np.pi * f / fs))[0]
     return response[0], response[1]
 
 
@@ -149,10 +149,12 @@ def sensitivity(rig: Rig, pid: AnyController, freq: ArrayLike, *, at: str = "con
     require(at in ("controller", "sensors"), "at", at, "'controller' or 'sensors'")
     rig_and_controller(rig, pid, "sensitivity")
     f = _frequencies(freq, pid.fs)
-    Phi, Gamma, states = discrete_plant(rig, pid.fs)
+    Phi, Gamma, _ = sampled_plant(rig, pid.fs)
     Ac, Bc, Cc, Dc = controller_matrices(pid)
     z = np.exp(2j * np.pi * f.ravel() / pid.fs)
-    plant = state_response(Phi, Gamma[:, 1:2], sensor_row(states), z)[0, 0]  # i_cmd -> ys (negative gain: -Kiy)
+    plant = state_response(Phi, Gamma[:, 1:2], sampled_sensor_rows(rig, len(Phi)), z)[
+        0, 0
+    ]  # i_cmd -> ys (negative gain: -Kiy)
     control = Dc[0, 0] + (state_response(Ac, Bc, Cc, z)[0, 0] if Ac.size else 0.0)
     return (1.0 / (1.0 - plant * control)).reshape(f.shape)
 
