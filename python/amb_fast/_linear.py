@@ -53,6 +53,7 @@ from ._linear_poles import (
 )
 from ._linear_response import (
     StabilityMargin,
+    controller_frequency_response,
     controller_response,
     effective_coefficients,
     iso_zone,
@@ -83,6 +84,7 @@ __all__ = [
     "System",
     "closed_loop",
     "closed_loop_poles",
+    "controller_frequency_response",
     "controller_matrices",
     "controller_response",
     "core_controller",

@@ -245,9 +245,10 @@ _STRUCTURE = ("mass", "gyroscopic", "stiffness", "damping", "actuators", "probes
 _LAYOUT = ("position", "velocity", "coil", "eddy", "sensor")
 
 
+@functools.lru_cache(maxsize=256)
 def _core_args(system: System) -> tuple[Mechanics, dict[str, Any]]:
     """The structure and the core's arguments for it: its matrices and each axis' chain as arrays (NaN where a
-    stage is ideal, where the transducer is DC coupled)."""
+    stage is ideal, where the transducer is DC coupled); made once per system (a search over controllers)."""
     mech, axes = system.mechanics(), tuple(system.axes)
     N = mech.axes
     require(len(axes) == N, "axes", len(axes), f"{N} (one chain per controlled axis)")

@@ -23,9 +23,9 @@ from .._linear import (
     StabilityMargin,
     System,
     checked_poles,
+    controller_frequency_response,
     controller_matrix,
     controller_response,
-    controller_state_space,
     eigenvalues,
     iso_zone,
     loop_model,
@@ -92,12 +92,6 @@ def predict(system: System, controller: ControllerSpec, freq: ArrayLike) -> np.n
     P = system.mechanics().readout @ state_response(model.M, model.Bf, model.C[:N], z, frequency_first=True)
     T = np.stack([transducer_response(axis, model.fs, z) for axis in system.axes], axis=-1)  # (freq, N)
     return P / T[:, None, :]
-
-
-def controller_frequency_response(controller: ControllerSpec, n: int, z: np.ndarray) -> np.ndarray:
-    """The controller matrix's digital response ``K(z)`` (delays included), shape (len(z), N, N)."""
-    Ac, Bc, Cc, Dc = controller_state_space(controller_matrix(controller, n))
-    return Dc + (state_response(Ac, Bc, Cc, z, frequency_first=True) if Ac.size else 0.0)
 
 
 def sensitivity(
