@@ -1,13 +1,14 @@
 """The linearised sampled-data loop in closed form: prediction, poles, margins, effective coefficients.
 
-Matrix-level numpy (no per-sample loops). The plant is discretised exactly (zero-order hold), so the
-frequency response here is what a noise-free, settled, period-averaged experiment must reproduce.
+Matrix-level numpy (no per-sample loops) on the core's model, of which one axis is the 1x1 case: the plant
+is discretised exactly (zero-order hold), so the frequency response here is what a noise-free, settled,
+period-averaged experiment must reproduce.
 
 The code is in three modules; import it from here, as the rest of the package does: ``_linear_loop``
-(the plant, the controller and the closed loop as state spaces), ``_linear_poles`` (the closed-loop
+(the plant, the controllers and the closed loop as state spaces, one axis or N), ``_linear_poles`` (the closed-loop
 poles as runs and sweeps compute them, the stability check, settling), ``_linear_response`` (the
 receptance, the sensitivity and its margin, the effective coefficients). ``__all__`` also names the
-private helpers that the sweep, the calibration, the two-axis model and the tests import from here.
+private helpers that the sweep, the calibration, the N-axis model and the tests import from here.
 """
 
 from __future__ import annotations
@@ -40,8 +41,6 @@ from ._linear_loop import (
 from ._linear_poles import (
     _closed_loop_stacks,
     _gain_arrays,
-    _unstable_error,
-    _unstable_poles,
     checked_poles,
     closed_loop_poles,
     eigenvalues,
@@ -70,10 +69,8 @@ __all__ = [
     "_closed_loop_stacks",
     "eigenvalues",
     "_gain_arrays",
-    "_unstable_poles",
     "plant_responses",
     "state_response",
-    "_unstable_error",
     "AnyController",
     "ControllerMatrix",
     "ControllerSpec",

@@ -370,9 +370,9 @@ def _loop_args(system: System, controller: ControllerMatrix) -> tuple[Mechanics,
 def _loop_of(mech: Mechanics, controller: ControllerMatrix, parts: dict[str, Any]) -> LoopModel:
     layout, lines = _names(mech, parts)
     names = [*layout.names, *lines] + [f"controller{j}" for j in range(parts["M"].shape[0] - parts["Phi"].shape[0])]
-    arrays = [parts[key] for key in ("M", "Bf", "Bn", "C", "Dn")]
-    _read_only(*arrays, parts["poles"])  # cached: a caller writing into closed_loop's A would change it
-    return LoopModel(*arrays, names, controller.fs, parts["poles"])
+    M, Bf, Bn, C, Dn, poles = (parts[key] for key in ("M", "Bf", "Bn", "C", "Dn", "poles"))
+    _read_only(M, Bf, Bn, C, Dn, poles)  # cached: a caller writing into closed_loop's A would change it
+    return LoopModel(M, Bf, Bn, C, Dn, names, controller.fs, poles)
 
 
 @functools.lru_cache(maxsize=64)

@@ -67,27 +67,16 @@ def require_stable(rig: Rig, controller: AnyController) -> np.ndarray:
     return checked_poles(loop_poles(rig, controller), loop)
 
 
-def _unstable_poles(poles: np.ndarray) -> np.ndarray:
-    """The poles on or outside the unit circle: the stability test of runs (one axis or two) and of two-axis
-    sweeps; one-axis sweeps compare each point's spectral radius with 1 (here, or in the core's threads)."""
-    return poles[np.abs(poles) >= 1.0]
-
-
 def checked_poles(poles: np.ndarray, loop: Callable[[], str]) -> np.ndarray:
-    """``poles``, made read-only, or :class:`UnstableLoopError` naming the unstable ones after ``loop()``
-    ("the closed loop is unstable with ...")."""
+    """``poles``, made read-only, or :class:`UnstableLoopError` naming the ones on or outside the unit circle
+    (the first four) after ``loop()`` ("the closed loop is unstable with ..."): the stability test of runs
+    and of N-axis sweeps (one-axis sweeps compare each point's spectral radius with 1)."""
     poles.flags.writeable = False
-    bad = _unstable_poles(poles)
+    bad = poles[np.abs(poles) >= 1.0]
     if bad.size:
-        raise _unstable_error(loop(), bad)
+        shown = ", ".join(f"{p:.6g} (|z|={abs(p):.6g})" for p in bad[:4])
+        raise UnstableLoopError(f"{loop()}: pole(s) on or outside the unit circle: {shown}", bad)
     return poles
-
-
-def _unstable_error(loop: str, bad: np.ndarray) -> UnstableLoopError:
-    """The error for a closed loop with the poles ``bad`` on or outside the unit circle (the first four
-    shown); ``loop`` begins the message ("the closed loop is unstable with ...")."""
-    shown = ", ".join(f"{p:.6g} (|z|={abs(p):.6g})" for p in bad[:4])
-    return UnstableLoopError(f"{loop}: pole(s) on or outside the unit circle: {shown}", bad)
 
 
 def _gain_arrays(pid: PID, kp: ArrayLike | None, ki: ArrayLike | None, kd: ArrayLike | None) -> np.ndarray:

@@ -36,11 +36,11 @@ from .._linear import (
     state_response,
     transducer_response,
 )
-from .._linear import sampled_plant as discrete_plant
+from .._linear import sampled_plant as discrete_plant  # the N-axis name
 from .._mechanics import Mechanics
 from .._validate import require
 
-# The model's N-axis names, importable from here as before (the rest is this module's own).
+# The model's N-axis names, importable from here as before.
 __all__ = ["Layout", "LoopModel", "System", "discrete_plant", "loop_models", "plant", "sensor_rows"]
 
 
