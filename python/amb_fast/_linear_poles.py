@@ -39,7 +39,11 @@ def loop_poles(rig: Rig, controller: AnyController) -> np.ndarray:
     if isinstance(controller, PID):
         ((_, stack),) = _closed_loop_stacks(rig, controller, _gain_arrays(controller, None, None, None))
         return eigenvalues(stack)[0]
-    return eigenvalues(closed_loop(rig, controller)[0][None])[0]
+    # closed_loop's matrix closed here around the cached plant: a sweep of the controller (a notch's
+    # frequency) would have the core discretise the same plant again at each point.
+    Phi, Gamma, _ = sampled_plant(rig, controller.fs)
+    M = _loop_matrix(Phi, Gamma[:, 1:2], sampled_sensor_rows(rig, len(Phi)), *controller_matrices(controller))
+    return eigenvalues(M[None])[0]
 
 
 def eigenvalues(stack: np.ndarray, workers: int = 1) -> np.ndarray:
