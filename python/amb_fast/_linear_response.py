@@ -180,9 +180,14 @@ def stability_margin(rig: Rig, pid: AnyController, points: int = 20_000) -> Stab
     if not stable:
         return StabilityMargin(np.inf, np.inf, np.nan, "D", False)
     f = np.geomspace(0.01, pid.fs / 2 * (1 - 1e-9), points)
-    S = np.abs(sensitivity(rig, pid, f))
-    j = int(np.argmax(S))
-    return StabilityMargin(float(S[j]), float(20 * np.log10(S[j])), float(f[j]), iso_zone(float(S[j])), True)
+    return peak_margin(f, np.abs(sensitivity(rig, pid, f)))
+
+
+def peak_margin(f: np.ndarray, values: np.ndarray) -> StabilityMargin:
+    """A stable loop's margin: the peak of ``values`` (a sensitivity's magnitude at ``f``, Hz), one axis or N."""
+    j = int(np.argmax(values))
+    peak = float(values[j])
+    return StabilityMargin(peak, float(20 * np.log10(peak)), float(f[j]), iso_zone(peak), True)
 
 
 def controller_response(controller: DesignController, freq: np.ndarray, *, discrete: bool = False) -> np.ndarray:

@@ -27,9 +27,9 @@ from .._linear import (
     controller_matrix,
     controller_response,
     eigenvalues,
-    iso_zone,
     loop_model,
     loop_models,
+    peak_margin,
     plant,
     sampled_sensor_rows,
     sensor_rows,
@@ -138,14 +138,8 @@ def stability_margin(system: System, controller: ControllerSpec, points: int = 2
         return StabilityMarginN(np.inf, np.inf, np.nan, "D", False, (unstable,) * N)
     f = np.geomspace(0.01, fs / 2 * (1 - 1e-9), points)
     S = sensitivity(system, controller, f)
-
-    def margin(values: np.ndarray) -> StabilityMargin:
-        j = int(np.argmax(values))
-        peak = float(values[j])
-        return StabilityMargin(peak, float(20 * np.log10(peak)), float(f[j]), iso_zone(peak), True)
-
-    top = margin(np.linalg.svd(S, compute_uv=False)[:, 0])
-    axes = tuple(margin(np.abs(S[:, j, j])) for j in range(N))
+    top = peak_margin(f, np.linalg.svd(S, compute_uv=False)[:, 0])
+    axes = tuple(peak_margin(f, np.abs(S[:, j, j])) for j in range(N))
     return StabilityMarginN(top.peak, top.peak_db, top.frequency, top.zone, True, axes)
 
 
