@@ -59,3 +59,14 @@ def test_unstable_messages_of_one_and_two_axes() -> None:
                         str(two.value))  # fmt: skip
     for error in (one.value, two.value):
         assert error.poles.size and np.all(np.abs(error.poles) >= 1.0)
+
+
+def test_a_cached_loop_model_cannot_be_changed_through_closed_loop() -> None:
+    # Before: system.closed_loop handed out the cached LoopModel's arrays writable; writing into A changed
+    # every later closed loop, prediction and pole of that (system, controller).
+    pid = af.PID.paper()
+    for A, B, C, _ in (af.system.closed_loop(QUIET, pid), af.closed_loop(QUIET, pid)):
+        for array in (A, B, C):
+            with pytest.raises(ValueError, match="read-only"):
+                array[0, 0] = 1.0
+    np.testing.assert_array_equal(af.system.loop_model(QUIET, pid).M, af.closed_loop(QUIET, pid)[0])

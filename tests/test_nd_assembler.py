@@ -16,7 +16,7 @@ import pytest
 from scipy.linalg import expm
 
 import amb_fast as af
-from amb_fast import _core
+from amb_fast import _core, _linear_loop
 from amb_fast._mechanics import Mechanics
 from amb_fast.system import _model
 from amb_fast.system._control import controller_matrix, controller_state_space
@@ -212,7 +212,7 @@ def test_batched_loops_equal_single_ones_to_the_bit() -> None:
 
 def core_args(**changes: Any) -> dict[str, Any]:
     sys = system(2, 2)
-    args = _model._core_args(sys)[1]
+    args = _linear_loop._core_args(sys)[1]
     return {**args, **changes}
 
 

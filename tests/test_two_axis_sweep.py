@@ -109,7 +109,7 @@ def test_points_at_the_stability_boundary_are_classified_as_run_experiment_does(
 def test_each_point_loop_is_built_once() -> None:
     """A core call takes hundreds of points, more than loop_model's cache holds: the sweep hands each
     point's checked loop on instead of asking the cache again (which rebuilt most of them)."""
-    from amb_fast.system import _model
+    from amb_fast import _linear_loop as _model  # where the loop models are cached
 
     coupled = ta.TwoAxisRig(x=af.Rig.paper(), y=af.Rig.paper(), kxy=2e3, kyx=-2e3)
     kxy = np.linspace(0.0, 4e3, 100) + 0.123  # fresh points

@@ -17,7 +17,7 @@ from . import _core
 from ._blas import one_blas_thread
 from ._dispatch import axes_aware
 from ._errors import UnstableLoopError
-from ._linear_loop import AnyController, closed_loop, controller_matrices, discrete_plant, loop_matrix, sensor_row
+from ._linear_loop import AnyController, closed_loop, controller_matrices, sampled_plant, sampled_sensor_rows
 from ._params import PID, Rig
 from ._validate import require, rig_and_controller
 
@@ -39,7 +39,11 @@ def loop_poles(rig: Rig, controller: AnyController) -> np.ndarray:
     if isinstance(controller, PID):
         ((_, stack),) = _closed_loop_stacks(rig, controller, _gain_arrays(controller, None, None, None))
         return eigenvalues(stack)[0]
-    return eigenvalues(closed_loop(rig, controller)[0][None])[0]
+    # closed_loop's matrix closed here around the cached plant: a sweep of the controller (a notch's
+    # frequency) would have the core discretise the same plant again at each point.
+    Phi, Gamma, _ = sampled_plant(rig, controller.fs)
+    M = _loop_matrix(Phi, Gamma[:, 1:2], sampled_sensor_rows(rig, len(Phi)), *controller_matrices(controller))
+    return eigenvalues(M[None])[0]
 
 
 def eigenvalues(stack: np.ndarray, workers: int = 1) -> np.ndarray:
@@ -67,27 +71,16 @@ def require_stable(rig: Rig, controller: AnyController) -> np.ndarray:
     return checked_poles(loop_poles(rig, controller), loop)
 
 
-def _unstable_poles(poles: np.ndarray) -> np.ndarray:
-    """The poles on or outside the unit circle: the stability test of runs (one axis or two) and of two-axis
-    sweeps; one-axis sweeps compare each point's spectral radius with 1 (here, or in the core's threads)."""
-    return poles[np.abs(poles) >= 1.0]
-
-
 def checked_poles(poles: np.ndarray, loop: Callable[[], str]) -> np.ndarray:
-    """``poles``, made read-only, or :class:`UnstableLoopError` naming the unstable ones after ``loop()``
-    ("the closed loop is unstable with ...")."""
+    """``poles``, made read-only, or :class:`UnstableLoopError` naming the ones on or outside the unit circle
+    (the first four) after ``loop()`` ("the closed loop is unstable with ..."): the stability test of runs
+    and of N-axis sweeps (one-axis sweeps compare each point's spectral radius with 1)."""
     poles.flags.writeable = False
-    bad = _unstable_poles(poles)
+    bad = poles[np.abs(poles) >= 1.0]
     if bad.size:
-        raise _unstable_error(loop(), bad)
+        shown = ", ".join(f"{p:.6g} (|z|={abs(p):.6g})" for p in bad[:4])
+        raise UnstableLoopError(f"{loop()}: pole(s) on or outside the unit circle: {shown}", bad)
     return poles
-
-
-def _unstable_error(loop: str, bad: np.ndarray) -> UnstableLoopError:
-    """The error for a closed loop with the poles ``bad`` on or outside the unit circle (the first four
-    shown); ``loop`` begins the message ("the closed loop is unstable with ...")."""
-    shown = ", ".join(f"{p:.6g} (|z|={abs(p):.6g})" for p in bad[:4])
-    return UnstableLoopError(f"{loop}: pole(s) on or outside the unit circle: {shown}", bad)
 
 
 def _gain_arrays(pid: PID, kp: ArrayLike | None, ki: ArrayLike | None, kd: ArrayLike | None) -> np.ndarray:
@@ -103,6 +96,17 @@ def _gain_arrays(pid: PID, kp: ArrayLike | None, ki: ArrayLike | None, kd: Array
     return gains.reshape(-1, 3)
 
 
+def _loop_matrix(
+    Phi: np.ndarray, Gu: np.ndarray, S: np.ndarray, Ac: np.ndarray, Bc: np.ndarray, Cc: np.ndarray, Dc: np.ndarray
+) -> np.ndarray:
+    """The closed loop's state matrix ``[[Phi + Gu Dc S, Gu Cc], [Bc S, Ac]]`` (``Gu``: the command's column
+    of ``Gamma``, ``S``: the sensor row), assembled in place (np.block costs more than the products)."""
+    n, m = Phi.shape[0], Ac.shape[0]
+    A = np.empty((n + m, n + m))
+    A[:n, :n], A[:n, n:], A[n:, :n], A[n:, n:] = Phi + Gu @ Dc @ S, Gu @ Cc, Bc @ S, Ac
+    return A
+
+
 @functools.lru_cache(maxsize=64)
 @one_blas_thread  # on a miss (sweeps of PID gains enter no BLAS guard of their own)
 def _affine_closed_loop(
@@ -110,15 +114,16 @@ def _affine_closed_loop(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The closed-loop matrix is affine in (kp, ki, kd) for a given set of controller states:
     ``A = base + kp S0 + (ki - ki0) S1 + (kd - kd0) S2`` with ki0, kd0 = 1 where the state exists.
-    ``pid``'s own gains do not matter here (callers pass them as zero, for the cache)."""
-    Phi, Gamma, states = discrete_plant(rig, pid.fs)
-    sensor = sensor_row(states)
-    # closed_loop(rig, replace(pid, kp=..., ki=..., kd=...))[0] at the base gains and one step in each
+    ``pid``'s own gains do not matter here (callers pass them as zero, for the cache).
+
+    :func:`closed_loop`'s matrix, specialised: the loop of the core's plant (:func:`sampled_plant`) at the
+    base gains and one step in each, so a sweep of many gain sets combines four matrices instead of
+    assembling a loop per set."""
+    Phi, Gamma, _ = sampled_plant(rig, pid.fs)
+    sensor, gu = sampled_sensor_rows(rig, len(Phi)), Gamma[:, 1:2]
     first, *rest = _pid_steps(pid, with_integral, with_derivative)
-    assert first is not None
-    gu = Gamma[:, 1:2]
-    base = loop_matrix(Phi, gu, sensor, *first)
-    return base, np.array([np.zeros_like(base) if m is None else loop_matrix(Phi, gu, sensor, *m) - base
+    base = _loop_matrix(Phi, gu, sensor, *first)
+    return base, np.array([np.zeros_like(base) if m is None else _loop_matrix(Phi, gu, sensor, *m) - base
                            for m in rest])  # fmt: skip
 
 

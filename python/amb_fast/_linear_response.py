@@ -5,6 +5,7 @@ the effective stiffness and damping of a controller's G (paper eq. 5, :func:`eff
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -14,12 +15,14 @@ from numpy.typing import ArrayLike
 from ._dispatch import axes_aware
 from ._linear_loop import (
     AnyController,
+    ControllerSpec,
     DesignController,
     closed_loop,
-    controller_matrices,
-    discrete_plant,
+    controller_matrix,
+    controller_state_space,
     is_controller,
-    sensor_row,
+    sampled_plant,
+    sampled_sensor_rows,
 )
 from ._linear_poles import _gain_arrays, closed_loop_poles
 from ._params import PID, Rig
@@ -90,10 +93,24 @@ def transducer_response(rig: Rig, fs: float, z: np.ndarray) -> np.ndarray:
 
 
 def plant_responses(rig: Rig, fs: float, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Sampled plant responses from force and from current command to the sensor, at ``f`` (Hz)."""
-    Phi, Gamma, states = discrete_plant(rig, fs)
-    response = state_response(Phi, Gamma, sensor_row(states), np.exp(2j * np.pi * f / fs))[0]
+    """Sampled plant responses from force and from current command to the sensor, at ``f`` (Hz); read-only."""
+    return _plant_responses(rig, float(fs), np.ascontiguousarray(f, dtype=float).tobytes())
+
+
+@functools.lru_cache(maxsize=16)
+def _plant_responses(rig: Rig, fs: float, lines: bytes) -> tuple[np.ndarray, np.ndarray]:
+    # Cached per rig and lines: a design's search asks for one plant's sensitivity under many controllers.
+    Phi, Gamma, _ = sampled_plant(rig, fs)
+    z = np.exp(2j * np.pi * np.frombuffer(lines) / fs)
+    response = state_response(Phi, Gamma, sampled_sensor_rows(rig, len(Phi)), z)[0]
+    response.flags.writeable = False
     return response[0], response[1]
+
+
+def controller_frequency_response(controller: ControllerSpec, n: int, z: np.ndarray) -> np.ndarray:
+    """The controller matrix's digital response ``K(z)`` (delays included), shape (len(z), N, N)."""
+    Ac, Bc, Cc, Dc = controller_state_space(controller_matrix(controller, n))
+    return Dc + (state_response(Ac, Bc, Cc, z, frequency_first=True) if Ac.size else 0.0)
 
 
 def _controller_terms(pid: PID, f: np.ndarray) -> np.ndarray:
@@ -149,11 +166,8 @@ def sensitivity(rig: Rig, pid: AnyController, freq: ArrayLike, *, at: str = "con
     require(at in ("controller", "sensors"), "at", at, "'controller' or 'sensors'")
     rig_and_controller(rig, pid, "sensitivity")
     f = _frequencies(freq, pid.fs)
-    Phi, Gamma, states = discrete_plant(rig, pid.fs)
-    Ac, Bc, Cc, Dc = controller_matrices(pid)
-    z = np.exp(2j * np.pi * f.ravel() / pid.fs)
-    plant = state_response(Phi, Gamma[:, 1:2], sensor_row(states), z)[0, 0]  # i_cmd -> ys (negative gain: -Kiy)
-    control = Dc[0, 0] + (state_response(Ac, Bc, Cc, z)[0, 0] if Ac.size else 0.0)
+    plant = plant_responses(rig, pid.fs, f.ravel())[1]  # i_cmd -> ys (negative gain: -Kiy)
+    control = controller_frequency_response(pid, 1, np.exp(2j * np.pi * f.ravel() / pid.fs))[:, 0, 0]
     return (1.0 / (1.0 - plant * control)).reshape(f.shape)
 
 
@@ -166,9 +180,14 @@ def stability_margin(rig: Rig, pid: AnyController, points: int = 20_000) -> Stab
     if not stable:
         return StabilityMargin(np.inf, np.inf, np.nan, "D", False)
     f = np.geomspace(0.01, pid.fs / 2 * (1 - 1e-9), points)
-    S = np.abs(sensitivity(rig, pid, f))
-    j = int(np.argmax(S))
-    return StabilityMargin(float(S[j]), float(20 * np.log10(S[j])), float(f[j]), iso_zone(float(S[j])), True)
+    return peak_margin(f, np.abs(sensitivity(rig, pid, f)))
+
+
+def peak_margin(f: np.ndarray, values: np.ndarray) -> StabilityMargin:
+    """A stable loop's margin: the peak of ``values`` (a sensitivity's magnitude at ``f``, Hz), one axis or N."""
+    j = int(np.argmax(values))
+    peak = float(values[j])
+    return StabilityMargin(peak, float(20 * np.log10(peak)), float(f[j]), iso_zone(peak), True)
 
 
 def controller_response(controller: DesignController, freq: np.ndarray, *, discrete: bool = False) -> np.ndarray:

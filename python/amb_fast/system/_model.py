@@ -1,207 +1,47 @@
 """The linearised loop of N axes in closed form: one assembly for every structure.
 
-The continuous plant joins the structure (:class:`Mechanics`) with each axis' chain of the one-axis rig
-(amplifier and eddy-current lags, the probe's lag, mass loading at the bearing plane); it is discretised
-exactly (matrix exponential of the augmented ``[[A, B], [0, 0]] T``), with each axis' dead time as on one
-axis (whole samples into that axis' command line, the fraction by the modified z-transform of the hold).
-The compiled core assembles all of it (``_core.nd_loop``; many points on its threads: :func:`loop_models`).
-States, in order: per coordinate ``k`` its position ``<q>`` and velocity ``<q>'``, then the chain of axis ``k``
-(``i``, ``i_f``, ``ys`` as present); then each axis' command line (``dead1`` ..). For one axis that is
-the one-axis plant's order; for two axes the two-axis rig's.
+The model (the plant, its sampled form, the closed loop under a controller matrix) is assembled by the
+compiled core in :mod:`amb_fast._linear_loop`, where the one-axis analysis is its 1x1 case; its N-axis names
+are importable from here. This module adds the N x N analysis: poles, receptance, sensitivity, margins and
+effective coefficients.
 """
 
 from __future__ import annotations
 
 import functools
-from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Literal, Protocol
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .. import _core
-from .._equality import ArrayRecord
 from .._linear import (
+    ControllerMatrix,
+    ControllerSpec,
+    Layout,
+    LoopModel,
     StabilityMargin,
+    System,
     checked_poles,
+    controller_frequency_response,
+    controller_matrix,
     controller_response,
     eigenvalues,
-    iso_zone,
+    loop_model,
+    loop_models,
+    peak_margin,
+    plant,
+    sampled_sensor_rows,
+    sensor_rows,
     state_response,
     transducer_response,
 )
+from .._linear import sampled_plant as discrete_plant  # the N-axis name
 from .._mechanics import Mechanics
-from .._params import Rig
-from .._validate import integer, require
-from ._control import ControllerMatrix, ControllerSpec, controller_matrix, controller_state_space
+from .._validate import require
 
-
-class System(Protocol):
-    """What the N-axis functions take: a structure (``mechanics()``) and one :class:`Rig` chain per axis;
-    hashable (a frozen dataclass), as the models are cached per distinct system."""
-
-    def __hash__(self) -> int: ...
-
-    @property
-    def axes(self) -> tuple[Rig, ...]: ...
-
-    def mechanics(self) -> Mechanics: ...
-
-
-@dataclass(frozen=True)
-class Layout:
-    """Where the plant's states are: per coordinate its position and velocity; per axis its coil current
-    (``i``), force-producing current (``i_f``) and probe output (``ys``), or -1 where the stage is ideal."""
-
-    position: tuple[int, ...]
-    velocity: tuple[int, ...]
-    coil: tuple[int, ...]
-    eddy: tuple[int, ...]
-    sensor: tuple[int, ...]
-    names: tuple[str, ...]
-
-
-_CHAIN = ("kyy", "kiy", "amp_bandwidth", "eddy_bandwidth", "sensor_bandwidth", "mass_loading", "dead_time",
-          "force_coupling_tau")  # fmt: skip
-
-
-def _core_args(system: System) -> tuple[Mechanics, dict[str, Any]]:
-    """The structure and the core's arguments for it: its matrices and each axis' chain as arrays (NaN where a
-    stage is ideal, where the transducer is DC coupled)."""
-    mech, axes = system.mechanics(), tuple(system.axes)
-    N = mech.axes
-    require(len(axes) == N, "axes", len(axes), f"{N} (one chain per controlled axis)")
-    require(mech.coordinates >= N, "structure", f"{mech.coordinates} coordinates", f">= {N} (its axes)")
-    chains = np.array([[getattr(a, name) for a in axes] for name in _CHAIN], dtype=float)  # None -> NaN
-    structure = {name: getattr(mech, name) for name in _STRUCTURE}
-    # A flexible structure's own elastic stiffness and damping act beside its process.
-    if mech.elastic is not None:
-        structure["stiffness"] = mech.stiffness + mech.elastic
-    if mech.elastic_damping is not None:
-        structure["damping"] = mech.damping + mech.elastic_damping
-    return mech, {**structure, **dict(zip(_CHAIN, chains))}
-
-
-_STRUCTURE = ("mass", "gyroscopic", "stiffness", "damping", "actuators", "probes", "speed")
-
-
-def _names(mech: Mechanics, parts: dict[str, Any]) -> tuple[Layout, tuple[str, ...]]:
-    """The plant's layout (from the core's indices) and the names of the axes' command lines."""
-    return _named(mech.coordinate_names, mech.names, *(parts[key] for key in _LAYOUT), parts.get("lines", ()))
-
-
-_LAYOUT = ("position", "velocity", "coil", "eddy", "sensor")
-
-
-@functools.lru_cache(maxsize=256)
-def _named(
-    coordinates: tuple[str, ...], axes: tuple[str, ...], *indices: tuple[int, ...]
-) -> tuple[Layout, tuple[str, ...]]:
-    *stages, lines = indices
-    names = [""] * sum(i >= 0 for at in stages for i in at)
-    for k, coordinate in enumerate(coordinates):
-        names[stages[0][k]], names[stages[1][k]] = coordinate, f"{coordinate}'"
-    for stage, at in zip(("i", "i_f", "ys"), stages[2:]):
-        for label, i in zip(axes, at):
-            if i >= 0:
-                names[i] = f"{label}.{stage}"
-    dead = tuple(f"{label}.dead{j + 1}" for label, line in zip(axes, lines) for j in range(line))
-    position, velocity, coil, eddy, sensor = stages
-    return Layout(position, velocity, coil, eddy, sensor, tuple(names)), dead
-
-
-def _read_only(*arrays: np.ndarray) -> None:
-    for a in arrays:
-        a.flags.writeable = False
-
-
-@functools.lru_cache(maxsize=64)
-def _plant(system: System) -> tuple[np.ndarray, np.ndarray, np.ndarray, Layout]:
-    mech, args = _core_args(system)
-    parts = _core.nd_loop(**args)
-    _read_only(parts["A"], parts["B"], parts["S"])
-    return parts["A"], parts["B"], parts["S"], _names(mech, parts)[0]
-
-
-def plant(system: System) -> tuple[np.ndarray, np.ndarray, Layout]:
-    """Continuous ``A``, ``B`` of the plant; inputs: the N shaker forces (N), then the N current commands
-    (A). Read-only, made once per distinct system (by the core: :func:`amb_fast._core.nd_loop`)."""
-    A, B, _, layout = _plant(system)
-    return A, B, layout
-
-
-def sensor_rows(system: System) -> np.ndarray:
-    """(N, plant states): what the N probes read, before noise (their lag's output, or the structure)."""
-    return _plant(system)[2]
-
-
-@functools.lru_cache(maxsize=64)
-def discrete_plant(system: System, fs: float) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
-    """Exact one-sample ``Phi``, ``Gamma`` (inputs: N forces, N commands) with each axis' dead time.
-
-    An axis with dead time ``m T + delta`` gets a command line ``<axis>.dead1 ..`` (one more when
-    ``delta > 0``): ``x[k+1] = Phi x + Gf f + G0 u[k-m] + G1 u[k-m-1]`` per command column, with
-    ``G0 = Gamma_u(T - delta)``, ``G1 = Phi(T - delta) Gamma_u(delta)``. Read-only.
-    """
-    mech, args = _core_args(system)
-    parts = _core.nd_loop(**args, fs=float(fs))
-    _read_only(parts["Phi"], parts["Gamma"])
-    layout, lines = _names(mech, parts)
-    return parts["Phi"], parts["Gamma"], layout.names + lines
-
-
-@dataclass(frozen=True, eq=False)
-class LoopModel(ArrayRecord):
-    """The closed loop of N axes as one discrete state space (sample period ``1/fs``).
-
-    ``z[k+1] = M z + Bf f + Bn n``; outputs ``o = C z + Dn n``: the N probe readings (m), then the N coil
-    currents (A). ``f``: applied forces (N); ``n``: probe noise (m). ``poles``: the recorded forces'
-    AC-coupling poles per axis (0: DC coupled).
-    """
-
-    M: np.ndarray
-    Bf: np.ndarray
-    Bn: np.ndarray
-    C: np.ndarray
-    Dn: np.ndarray
-    states: list[str]
-    fs: float
-    poles: np.ndarray
-
-
-def _loop_args(system: System, controller: ControllerMatrix) -> tuple[Mechanics, dict[str, Any]]:
-    mech, args = _core_args(system)
-    Ac, Bc, Cc, Dc = controller_state_space(controller)
-    return mech, {**args, "fs": controller.fs, "Ac": Ac, "Bc": Bc, "Cc": Cc, "Dc": Dc}
-
-
-def _loop_of(mech: Mechanics, controller: ControllerMatrix, parts: dict[str, Any]) -> LoopModel:
-    layout, lines = _names(mech, parts)
-    names = [*layout.names, *lines] + [f"controller{j}" for j in range(parts["M"].shape[0] - parts["Phi"].shape[0])]
-    return LoopModel(
-        parts["M"], parts["Bf"], parts["Bn"], parts["C"], parts["Dn"], names, controller.fs, parts["poles"]
-    )
-
-
-@functools.lru_cache(maxsize=64)
-def _loop_model(system: System, controller: ControllerMatrix) -> LoopModel:
-    mech, args = _loop_args(system, controller)
-    return _loop_of(mech, controller, _core.nd_loop(**args))
-
-
-def loop_models(points: Sequence[tuple[System, ControllerSpec]], workers: int = 1) -> list[LoopModel]:
-    """The closed loops of many ``(system, controller)`` points (a sweep's), assembled in one call of the core
-    on ``workers`` threads (the GIL released): each equal to :func:`loop_model`'s for that point."""
-    specs = [(system, controller_matrix(c, len(system.axes))) for system, c in points]
-    given = [_loop_args(system, spec) for system, spec in specs]
-    parts = _core.nd_loops([args for _, args in given], integer("workers", workers, 1))
-    return [_loop_of(mech, spec, p) for (mech, _), (_, spec), p in zip(given, specs, parts)]
-
-
-def loop_model(system: System, controller: ControllerSpec) -> LoopModel:
-    """The closed loop of ``system`` under ``controller`` (cached per distinct value)."""
-    return _loop_model(system, controller_matrix(controller, len(system.axes)))
+# The model's N-axis names, importable from here as before.
+__all__ = ["Layout", "LoopModel", "System", "discrete_plant", "loop_models", "plant", "sensor_rows"]
 
 
 def closed_loop(system: System, controller: ControllerSpec) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -254,12 +94,6 @@ def predict(system: System, controller: ControllerSpec, freq: ArrayLike) -> np.n
     return P / T[:, None, :]
 
 
-def controller_frequency_response(controller: ControllerSpec, n: int, z: np.ndarray) -> np.ndarray:
-    """The controller matrix's digital response ``K(z)`` (delays included), shape (len(z), N, N)."""
-    Ac, Bc, Cc, Dc = controller_state_space(controller_matrix(controller, n))
-    return Dc + (state_response(Ac, Bc, Cc, z, frequency_first=True) if Ac.size else 0.0)
-
-
 def sensitivity(
     system: System, controller: ControllerSpec, freq: ArrayLike, *, at: Literal["controller", "sensors"] = "controller"
 ) -> np.ndarray:
@@ -274,7 +108,7 @@ def sensitivity(
     f = frequencies(freq, model.fs)
     z = np.exp(2j * np.pi * f / model.fs)
     Phi, Gamma, _ = discrete_plant(system, model.fs)
-    P = state_response(Phi, Gamma[:, N:], model.C[:N, : Phi.shape[0]], z, frequency_first=True)  # probe rows
+    P = state_response(Phi, Gamma[:, N:], sampled_sensor_rows(system, len(Phi)), z, frequency_first=True)
     K = controller_frequency_response(controller, N, z)
     return np.linalg.inv(np.eye(N) - (K @ P if at == "controller" else P @ K))
 
@@ -304,14 +138,8 @@ def stability_margin(system: System, controller: ControllerSpec, points: int = 2
         return StabilityMarginN(np.inf, np.inf, np.nan, "D", False, (unstable,) * N)
     f = np.geomspace(0.01, fs / 2 * (1 - 1e-9), points)
     S = sensitivity(system, controller, f)
-
-    def margin(values: np.ndarray) -> StabilityMargin:
-        j = int(np.argmax(values))
-        peak = float(values[j])
-        return StabilityMargin(peak, float(20 * np.log10(peak)), float(f[j]), iso_zone(peak), True)
-
-    top = margin(np.linalg.svd(S, compute_uv=False)[:, 0])
-    axes = tuple(margin(np.abs(S[:, j, j])) for j in range(N))
+    top = peak_margin(f, np.linalg.svd(S, compute_uv=False)[:, 0])
+    axes = tuple(peak_margin(f, np.abs(S[:, j, j])) for j in range(N))
     return StabilityMarginN(top.peak, top.peak_db, top.frequency, top.zone, True, axes)
 
 
