@@ -37,7 +37,6 @@ def test_the_calibration_entry_points_are_wrapped() -> None:
         design_controller,
         RigFit.predict,
         RigFit.coefficients,
-        af.two_axis.sweep,
         _affine_closed_loop,
     )
     for function in entry_points:
@@ -111,3 +110,25 @@ def test_a_guard_inside_a_guard_does_nothing() -> None:
             del controller.limit
     with _blas.blas_on_one_thread():  # a fresh guard after the first ended
         assert blas_threads() == [1] * len(blas_threads())
+
+
+def _threads_in_chunk(values: dict, seeds, core_threads: int) -> dict:
+    import numpy as np
+
+    return {"threads": np.full(seeds.size, max(blas_threads() or [1]))}
+
+
+@pytest.mark.parametrize("here", [True, False])
+def test_the_sweep_driver_runs_its_chunks_on_one_blas_thread(here: bool) -> None:
+    """Every sweep (one axis, two axes, rotors) runs through ``run_points``: its chunks see one BLAS thread."""
+    import numpy as np
+
+    from amb_fast._sweep import run_points
+
+    if not blas_threads():
+        pytest.skip("no BLAS library that threadpoolctl can see")
+    with threadpoolctl.threadpool_limits(2, user_api="blas"):
+        out = run_points(_threads_in_chunk, (), {"kp": np.arange(4.0)}, np.arange(4), workers=2, executor=None,
+                         progress=False, bytes_per_point=8, here=here)  # fmt: skip
+        assert blas_threads() == [2] * len(blas_threads())
+    assert out["threads"].tolist() == [1, 1, 1, 1]
