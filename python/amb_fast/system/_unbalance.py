@@ -132,7 +132,7 @@ def unbalance_response(
     require(W.ndim == 1 and W.size >= 1 and bool(np.all(np.isfinite(W))), "speeds", speeds,
             "a 1-D array of finite speeds, rad/s")  # fmt: skip
     spec = controller_matrix(controller, 4)
-    fs, T = spec.fs, 1.0 / spec.fs
+    fs = spec.fs
     require(
         bool(np.all(np.abs(W) < np.pi * fs)), "speeds", speeds, f"below the Nyquist rate pi fs = {np.pi * fs:g} rad/s"
     )
