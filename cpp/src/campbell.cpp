@@ -150,10 +150,10 @@ struct InverseIteration {
 
 // y with H y = lambda y, |y| = 1, by two steps of inverse iteration from the start vector y (H upper
 // Hessenberg, row-major; LU of H - lambda I pivoting between neighbouring rows; a zero pivot made tiny, as
-// LAPACK's hsein). Elementwise loops over real arrays (vectorised where the processor can; no reduction is
-// reordered, so the same digits either way).
+// LAPACK's hsein); with `solve`, y becomes (H - lambda I)^-1 y (one step, not normalised). Elementwise loops over real
+// arrays (vectorised where the processor can; no reduction is reordered, so the same digits either way).
 AMB_FAST_ALWAYS_INLINE void inverse_iteration_kernel(const double* H, Eigen::Index n, double lambda_r, double lambda_i,
-                                                     double tiny, InverseIteration& w) {
+                                                     double tiny, InverseIteration& w, bool solve) {
     double *ur = w.ur.data(), *ui = w.ui.data(), *yr = w.yr.data(), *yi = w.yi.data();
     for (Eigen::Index i = 0; i < n; ++i) {
         for (Eigen::Index j = std::max<Eigen::Index>(i - 1, 0); j < n; ++j)
@@ -178,7 +178,7 @@ AMB_FAST_ALWAYS_INLINE void inverse_iteration_kernel(const double* H, Eigen::Ind
         }
     }
     if (ur[n * n - 1] == 0.0 && ui[n * n - 1] == 0.0) ur[n * n - 1] = tiny;
-    for (int step = 0; step < 2; ++step) {
+    for (int step = 0; step < (solve ? 1 : 2); ++step) {
         for (Eigen::Index j = 0; j + 1 < n; ++j) {
             const auto J = static_cast<std::size_t>(j);
             if (w.swapped[J] != 0.0) std::swap(yr[j], yr[j + 1]), std::swap(yi[j], yi[j + 1]);
@@ -196,6 +196,7 @@ AMB_FAST_ALWAYS_INLINE void inverse_iteration_kernel(const double* H, Eigen::Ind
             yr[i] = (sr * rr[i] + si * ri[i]) / norm;
             yi[i] = (si * rr[i] - sr * ri[i]) / norm;
         }
+        if (solve) break;
         double norm = 0.0;
         for (Eigen::Index i = 0; i < n; ++i) norm += yr[i] * yr[i] + yi[i] * yi[i];
         norm = 1.0 / std::sqrt(norm);
@@ -203,14 +204,14 @@ AMB_FAST_ALWAYS_INLINE void inverse_iteration_kernel(const double* H, Eigen::Ind
     }
 }
 
-void inverse_iteration_portable(const double* H, Eigen::Index n, double lr, double li, double tiny,
-                                InverseIteration& w) {
-    inverse_iteration_kernel(H, n, lr, li, tiny, w);
+void inverse_iteration_portable(const double* H, Eigen::Index n, double lr, double li, double tiny, InverseIteration& w,
+                                bool solve) {
+    inverse_iteration_kernel(H, n, lr, li, tiny, w, solve);
 }
 #if AMB_FAST_WIDE_LANES
 __attribute__((target("avx2"))) void inverse_iteration_avx2(const double* H, Eigen::Index n, double lr, double li,
-                                                            double tiny, InverseIteration& w) {
-    inverse_iteration_kernel(H, n, lr, li, tiny, w);
+                                                            double tiny, InverseIteration& w, bool solve) {
+    inverse_iteration_kernel(H, n, lr, li, tiny, w, solve);
 }
 #else
 constexpr auto inverse_iteration_avx2 = inverse_iteration_portable;
@@ -223,18 +224,19 @@ class Modes {
         : A(m, m), d(m), hessenberg(m), H(m, m), work(m, m), Q(m, m), iteration(m), v(static_cast<std::size_t>(m)) {}
 
     // A: the matrix (m x m, overwritten by its balanced form). shapes: R v for each eigenvalue (shape[j * m + i]),
-    // or null for the eigenvalues only.
-    void compute(const RowMatrixXd* R, cd* values, cd* shapes) {
+    // or null for the eigenvalues only; `solvable`: keep what `solve` needs.
+    void compute(const RowMatrixXd* R, cd* values, cd* shapes, bool solvable = false) {
         const Eigen::Index m = A.rows();
         balance(A, d);
         hessenberg.compute(A);
         H = hessenberg.matrixH();
         work = H;
         hessenberg_eigenvalues(work.data(), m, values);
-        if (shapes == nullptr) return;
+        if (shapes == nullptr && !solvable) return;
         Q = hessenberg.matrixQ();
+        tiny = std::numeric_limits<double>::epsilon() * std::max(H.cwiseAbs().maxCoeff(), 1e-300);
+        if (shapes == nullptr) return;
         const Eigen::Index r = R->rows();
-        const double tiny = std::numeric_limits<double>::epsilon() * std::max(H.cwiseAbs().maxCoeff(), 1e-300);
         for (Eigen::Index i = 0; i < m; ++i) {
             cd* shape = shapes + i;  // shape[j * m]: row j
             const bool conjugate = values[i].imag() < 0.0 && i > 0 && values[i - 1] == std::conj(values[i]);
@@ -250,8 +252,8 @@ class Modes {
                 iteration.yr[j] = 1.0 + 0.5 * std::sin(static_cast<double>(static_cast<std::size_t>(i + 1) * (j + 1)));
                 iteration.yi[j] = 0.0;
             }
-            (simd_avx2() ? inverse_iteration_avx2 : inverse_iteration_portable)(H.data(), m, values[i].real(),
-                                                                                values[i].imag(), tiny, iteration);
+            (simd_avx2() ? inverse_iteration_avx2 : inverse_iteration_portable)(
+                H.data(), m, values[i].real(), values[i].imag(), tiny, iteration, false);
             double norm = 0.0;  // v = D Q y, of unit norm
             for (Eigen::Index a = 0; a < m; ++a) {
                 cd sum = 0.0;
@@ -270,9 +272,31 @@ class Modes {
         }
     }
 
+    // x (m) with (z I - A) x = g (m) for the matrix last computed (solvable): through its Hessenberg form,
+    // A = D Q H Q^T D^-1, in O(m^2) beyond it ((H - z I) w = -Q^T D^-1 g, x = D Q w).
+    void solve(cd z, const cd* g, cd* x) {
+        const Eigen::Index m = A.rows();
+        for (Eigen::Index b = 0; b < m; ++b) {
+            cd sum = 0.0;
+            for (Eigen::Index a = 0; a < m; ++a) sum += Q(a, b) * (g[a] / d[a]);
+            iteration.yr[static_cast<std::size_t>(b)] = -sum.real();
+            iteration.yi[static_cast<std::size_t>(b)] = -sum.imag();
+        }
+        (simd_avx2() ? inverse_iteration_avx2 : inverse_iteration_portable)(H.data(), m, z.real(), z.imag(), tiny,
+                                                                            iteration, true);
+        for (Eigen::Index a = 0; a < m; ++a) {
+            cd sum = 0.0;
+            for (Eigen::Index b = 0; b < m; ++b)
+                sum +=
+                    Q(a, b) * cd(iteration.yr[static_cast<std::size_t>(b)], iteration.yi[static_cast<std::size_t>(b)]);
+            x[a] = d[a] * sum;
+        }
+    }
+
     Eigen::MatrixXd A;
 
   private:
+    double tiny = 0.0;
     Eigen::VectorXd d;
     Eigen::HessenbergDecomposition<Eigen::MatrixXd> hessenberg;
     RowMatrixXd H, work;
@@ -328,7 +352,6 @@ void speed_loops(const SpeedLoops& in, const double* values_p, Eigen::Index coun
     in_blocks(count, 8, workers, [&] {
         return [&, size, augmented = Eigen::MatrixXd(size, size), E = Eigen::MatrixXd(size, size),
                 X = RowMatrixXd(n, n + k * H), M = RowMatrixXd(m, m), modes = Modes(m),
-                lu = Eigen::PartialPivLU<Eigen::MatrixXcd>(m), Z = Eigen::MatrixXcd(m, m),
                 x = Eigen::VectorXcd(m)](Eigen::Index begin, Eigen::Index end) mutable {
             for (Eigen::Index s = begin; s < end; ++s) {
                 const double p = values_p[s];
@@ -360,13 +383,8 @@ void speed_loops(const SpeedLoops& in, const double* values_p, Eigen::Index coun
                 M.topRows(n).noalias() += X * in.P;
                 if (loops != nullptr) Eigen::Map<RowMatrixXd>(loops + s * m * m, m, m) = M;
                 modes.A = M;
-                modes.compute(&in.R, values + s * m, shaped ? shapes + s * r * m : nullptr);
-                if (!driven) continue;
-                const cd z = std::polar(1.0, p * T);
-                Z = -M.cast<cd>();
-                Z.diagonal().array() += z;
-                lu.compute(Z);
-                Eigen::Map<Eigen::VectorXcd>(states + s * m, m) = lu.solve(x);
+                modes.compute(&in.R, values + s * m, shaped ? shapes + s * r * m : nullptr, driven);
+                if (driven) modes.solve(std::polar(1.0, p * T), x.data(), states + s * m);
             }
         };
     });
