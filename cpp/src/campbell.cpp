@@ -370,8 +370,15 @@ void speed_loops(const SpeedLoops& in, const double* values_p, Eigen::Index coun
                         aug(n + k + 1, n + k) = p * h;
                     }
                     aug.array() *= scaled.topLeftCorner(e, e).array();
+                    double force = 1.0;  // the force's columns scaled (a power of two) to no more than unit size
+                    if (drives) {
+                        const double size = aug.block(0, n + k, n, 2).cwiseAbs().colwise().sum().maxCoeff();
+                        if (size > 1.0) force = std::exp2(std::ceil(std::log2(size)));
+                        aug.block(0, n + k, n, 2) /= force;
+                    }
                     E.topLeftCorner(e, e) = aug.exp();
                     E.topLeftCorner(e, e).array() /= scaled.topLeftCorner(e, e).array();
+                    if (drives) E.block(0, n + k, n, 2) *= force;
                     if (j == 0) X.leftCols(n) = E.topLeftCorner(n, n);
                     if (drives) {  // G_p = Re G + j Im G, and the loop's drive [G_p; 0]
                         x.setZero();
