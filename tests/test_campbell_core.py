@@ -79,14 +79,14 @@ def test_speed_loops_refuse_mismatched_shapes_and_holds() -> None:
         _core.speed_loops(A0, A1, B, holds, P, L, [0.0], drive=np.ones(3))
 
 
-def test_loop_stack_is_loop_model_with_any_dead_times() -> None:
+def test_speed_loops_are_loop_model_with_any_dead_times() -> None:
     """Every speed's loop as loop_model makes it: axes without dead time, with a fraction of a sample only,
     whole samples only and both (4 kHz: T = 0.25 ms), so the core's holds over T - delta are checked."""
     axes = [replace(af.Rig.paper(), dead_time=d) for d in (0.0, 1e-4, 5e-4, 6e-4)]
     rig = af.RotorRig(af.RotorRig.example().rotor, axes)
     spec = _control.controller_matrix(af.RotorRig.example_controller(), 4)
     speeds = np.array([0.0, 2500.0])
-    stack = _campbell.loop_stack(rig, spec, speeds)
+    stack = _campbell.speed_loops(rig, spec, speeds, loops=True)[3]
     for M, W in zip(stack, speeds):
         expected = _model.loop_model(rig.at_speed(W), spec).M
         np.testing.assert_allclose(M, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
@@ -101,7 +101,8 @@ def test_loop_modes_poles_and_shapes_are_numpys() -> None:
     """Every pole is numpy's; for a simple pole the shape R v is numpy's eigenvector's up to a unit phase; on
     the positive real axis no shape (zero)."""
     rig, pid = af.RotorRig.example(), af.RotorRig.example_controller()
-    stack = _campbell.loop_stack(rig, _control.controller_matrix(pid, 4), np.array([0.0, 700.0, 4000.0]))
+    spec = _control.controller_matrix(pid, 4)
+    stack = _campbell.speed_loops(rig, spec, np.array([0.0, 700.0, 4000.0]), loops=True)[3]
     rng = np.random.default_rng(2)
     stack = np.concatenate([stack, rng.standard_normal((4, stack.shape[1], stack.shape[1]))])
     R = rng.standard_normal((3, stack.shape[1]))

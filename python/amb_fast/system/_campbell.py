@@ -155,13 +155,9 @@ def speed_plant(rig: RotorRig) -> tuple[np.ndarray, np.ndarray, np.ndarray, Layo
 
 
 def _loop_parts(rig: RotorRig, controller: ControllerMatrix) -> tuple[np.ndarray, ...]:
-    """The speed-independent parts of :func:`loop_model`'s closed loop for :func:`_core.speed_loops`: ``A0``,
-    ``A1``, the commands' ``B``, the holds ``[T, T - delta, ...]`` (one per fractional dead time ``delta``), and
-    ``P``, ``L`` with the loop ``L + [Phi | Gamma(T) | Gamma(T - delta) ...] P`` in the plant's rows, ``L`` below.
-
-    A fractional dead time's command enters over ``T - delta`` as ``G0 = Gamma(T - delta)`` and a sample late
-    as ``Gamma(T) - G0`` (:func:`discrete_plant`'s columns); the command lines and the controller are the same
-    at every speed."""
+    """:func:`loop_model`'s loop as :func:`_core.speed_loops` takes it: ``A0``, ``A1``, the commands' ``B``, the holds
+    ``[T, T - delta, ...]`` (per fractional dead time ``delta``: its command enters as ``G0 = Gamma(T - delta)``
+    and a sample late as ``Gamma(T) - G0``), ``P`` and ``L`` (the lines and the controller, at every speed)."""
     A0, A1, B, _ = speed_plant(rig)
     n, N = A0.shape[0], B.shape[1] // 2
     splits = [split_dead_time(axis.dead_time, controller.fs) for axis in rig.axes]
@@ -190,22 +186,15 @@ def _loop_parts(rig: RotorRig, controller: ControllerMatrix) -> tuple[np.ndarray
     S = np.zeros((N, size))
     S[:, :n] = sensor_rows(rig)
     closed = np.hstack([Phi + Gu @ (Dc @ S), Gu @ Cc])
-    L = np.zeros((size + Ac.shape[0], size + Ac.shape[0]))
-    L[n:size] = closed[width:]
-    L[size:] = np.hstack([Bc @ S, Ac])
+    L = np.vstack([np.zeros((n, closed.shape[1])), closed[width:], np.hstack([Bc @ S, Ac])])
     T = 1.0 / controller.fs
     return A0, A1, B[:, N:], np.array([T] + [T - f for f in fractions]), closed[:width], L
 
 
 def speed_loops(rig: RotorRig, controller: ControllerMatrix, speeds: np.ndarray, **options: Any) -> tuple:
-    """:func:`_core.speed_loops` for ``rig`` under ``controller`` at ``speeds`` (rad/s): the loops' poles,
-    (shapes, steady states, loops as ``options`` ask, else None), on the core's threads."""
+    """:func:`_core.speed_loops` for ``rig`` under ``controller`` at ``speeds`` (rad/s), on the core's threads:
+    the poles and, as ``options`` ask (else None), shapes, steady states and the loops (:func:`loop_model`'s)."""
     return _core.speed_loops(*_loop_parts(rig, controller), speeds, workers=_workers(speeds.size), **options)
-
-
-def loop_stack(rig: RotorRig, controller: ControllerMatrix, speeds: np.ndarray) -> np.ndarray:
-    """The closed loop's matrix at each speed, (speeds, n, n), as :func:`loop_model` makes it (the same states)."""
-    return speed_loops(rig, controller, speeds, loops=True)[3]
 
 
 def campbell(rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike) -> Campbell:

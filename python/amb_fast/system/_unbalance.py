@@ -103,18 +103,12 @@ def _drive(rig: RotorRig, sources: list[tuple[np.ndarray, complex]]) -> np.ndarr
 
 def _drives(rig: RotorRig, sources: list[tuple[np.ndarray, complex]], speed: float, T: float) -> np.ndarray:
     """``G_W f``: what one sample of the rotating force ``Re(f e^{jWt})`` adds to the plant's state from
-    ``t = 0`` at the speed ``W``, (plant states,) complex, integrated exactly in one exponential (as the core's
-    :func:`speed_loops` does for a run-up)."""
+    ``t = 0`` at the speed ``W``, (plant states,) complex, integrated exactly in one exponential."""
     A0, A1, _, _ = speed_plant(rig)
-    b, n = _drive(rig, sources), A0.shape[0]
-    # Real arithmetic: the force's phasor as a 2-state oscillator (cos W t, sin W t), whose columns give
-    # Re G and -Im G.
-    augmented = np.zeros((n + 2, n + 2))
-    augmented[:n, :n] = (A0 + speed * A1) * T
-    augmented[:n, n], augmented[:n, n + 1] = speed**2 * T * b.real, -(speed**2) * T * b.imag
-    augmented[n, n + 1], augmented[n + 1, n] = -speed * T, speed * T
-    E = scipy.linalg.expm(augmented)
-    return E[:n, n] - 1j * E[:n, n + 1]
+    n = A0.shape[0]
+    augmented = np.zeros((n + 1, n + 1), dtype=complex)
+    augmented[:n, :n], augmented[:n, n], augmented[n, n] = A0 + speed * A1, speed**2 * _drive(rig, sources), 1j * speed
+    return scipy.linalg.expm(augmented * T)[:n, n]
 
 
 def unbalance_response(
