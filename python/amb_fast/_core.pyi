@@ -153,7 +153,7 @@ def speed_loops(
     A0: ArrayLike,
     A1: ArrayLike,
     B: ArrayLike,
-    holds: Sequence[float],
+    holds: ArrayLike,
     P: ArrayLike,
     L: ArrayLike,
     speeds: ArrayLike,

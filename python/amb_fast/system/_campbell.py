@@ -154,7 +154,9 @@ def speed_plant(rig: RotorRig) -> tuple[np.ndarray, np.ndarray, np.ndarray, Layo
     return A0, plant(rig.at_speed(1.0))[0] - A0, B, layout
 
 
-def _loop_parts(rig: RotorRig, controller: ControllerMatrix) -> tuple[np.ndarray, ...]:
+def _loop_parts(
+    rig: RotorRig, controller: ControllerMatrix
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`loop_model`'s loop as :func:`_core.speed_loops` takes it: ``A0``, ``A1``, the commands' ``B``, the holds
     ``[T, T - delta, ...]`` (per fractional dead time ``delta``: its command enters as ``G0 = Gamma(T - delta)``
     and a sample late as ``Gamma(T) - G0``), ``P`` and ``L`` (the lines and the controller, at every speed)."""
