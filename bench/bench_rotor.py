@@ -15,16 +15,18 @@ the one-axis paper experiment, in interleaved pairs (CPU time). Target: <= 10x.
 Unbalance run-up (issue 27): ``unbalance_response`` at 500 speeds against a numpy loop solving the same
 linear systems: per speed the plant, the force's drive and the held commands discretised in one complex
 ``scipy.linalg.expm`` of the augmented matrix, the loop closed, ``numpy.linalg.solve`` at ``z = e^{jWT}``.
-Target: <= 0.2x. The peer is timed twice, as the process leaves BLAS (wall) and on one BLAS thread (CPU,
+Target: <= 0.2x. ``unbalance_response`` does each speed in one task of the core: one real exponential (the
+force as a two-state oscillator), the poles (the stability check) and the solve through the loop's
+Hessenberg form. The peer is timed twice, as the process leaves BLAS (wall) and on one BLAS thread (CPU,
 like ``unbalance_response``, which runs on one: small matrices gain nothing from a second thread).
 
 Campbell: 500 speeds, against the peer a user would write: for each speed the closed-loop matrix built
 in numpy (the continuous plant and controller from amb_fast's model, ``scipy.linalg.expm`` of the
 augmented matrix, the loop closed) and ``numpy.linalg.eigvals``. Target (issue 26): <= 0.2x. The
-Campbell diagram discretises every speed's plant in the core (the loops closed in numpy, all speeds at
-once) and computes there each pole and, for the whirl, its mode's displacement at the bearings (inverse
-iteration on the Hessenberg form), on the core's threads; it does more than the peer (the shapes). On a
-loaded machine the peer's OpenBLAS threads slow it down: run with OPENBLAS_NUM_THREADS=1 for the fair ratio.
+Campbell diagram does each speed in one task of the core, on its threads: the hold's exponential, the
+loop closed, every pole (Francis QR on the Hessenberg form) and, for the whirl, its mode's displacement
+at the bearings (inverse iteration); it does more than the peer (the shapes). On a loaded machine the
+peer's OpenBLAS threads slow it down: run with OPENBLAS_NUM_THREADS=1 for the fair ratio.
 
 Flexible rotor: ``FlexibleRotor.example()`` (ROSS's 30-element shaft, 8 bending modes kept in each plane:
 20 coordinates) on ``Rig.paper()``'s chains under the same PID, the same experiment at standstill, against

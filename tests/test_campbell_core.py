@@ -1,5 +1,5 @@
 """The core's Campbell linear algebra against numpy/scipy: the sampled loops of a plant affine in the speed
-(``_core.sampled_loops``) and each loop's poles with their shapes at chosen rows (``_core.loop_modes``)."""
+(``_core.speed_loops``) and each loop's poles with their shapes at chosen rows (``_core.loop_modes``)."""
 
 from __future__ import annotations
 
@@ -14,39 +14,79 @@ from amb_fast import _core
 from amb_fast.system import _campbell, _control, _model
 
 
-@pytest.mark.parametrize("workers", [1, 2])
-def test_hold_stacks_are_scipys_expm(workers: int) -> None:
-    rng = np.random.default_rng(1)
-    n, k = 7, 2
+def random_parts(rng: np.random.Generator, n: int = 7, k: int = 2, m: int = 11) -> tuple[np.ndarray, ...]:
+    """A plant affine in the speed with two holds, and random P, L (L zero in the plant's rows)."""
     A0, A1 = rng.standard_normal((n, n)) * 300.0, rng.standard_normal((n, n))
     B = rng.standard_normal((n, k))
+    P, L = rng.standard_normal((n + 2 * k, m)) * 0.3, rng.standard_normal((m, m)) * 0.3
+    L[:n] = 0.0
+    return A0, A1, B, np.array([2.5e-4, 1.7e-4]), P, L
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_speed_loops_are_scipys_expm_eigvals_and_solve(workers: int) -> None:
+    """Each speed's loop is L + [Phi | Gamma(T) | Gamma(h)] P from scipy's expm; its poles are numpy's
+    eigenvalues; the steady state under the rotating force ``Re(p^2 b e^{jpt})`` solves the loop at
+    ``z = e^{jpT}`` with the force's sample integral from scipy's complex expm."""
+    rng = np.random.default_rng(1)
+    A0, A1, B, holds, P, L = random_parts(rng)
+    n, k, m = B.shape[0], B.shape[1], L.shape[0]
+    b = rng.standard_normal(n) + 1j * rng.standard_normal(n)
     speeds = np.linspace(-500.0, 2000.0, 37)
-    holds = [2.5e-4, 1.7e-4]
-    got = _core.hold_stacks(A0, A1, B, holds, speeds, workers)
-    assert got.shape == (speeds.size, 2, n, n + k)
-    for E, W in zip(got, speeds):
+    values, shapes, states, loops = _core.speed_loops(A0, A1, B, holds, P, L, speeds, drive=b, loops=True,
+                                                      workers=workers)  # fmt: skip
+    assert shapes is None and loops.shape == (speeds.size, m, m) and states.shape == (speeds.size, m)
+    for W, M, z, x in zip(speeds, loops, values, states):
+        blocks = []
         for j, h in enumerate(holds):
             aug = np.zeros((n + k, n + k))
             aug[:n, :n], aug[:n, n:] = (A0 + W * A1) * h, B * h
-            expected = scipy.linalg.expm(aug)[:n]
-            np.testing.assert_allclose(E[j], expected, rtol=0, atol=1e-13 * np.abs(expected).max())
+            E = scipy.linalg.expm(aug)
+            blocks += [E[:n, :n]] * (j == 0) + [E[:n, n:]]
+        expected = L.copy()
+        expected[:n] += np.hstack(blocks) @ P
+        np.testing.assert_allclose(M, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
+        assert matched(z, np.linalg.eigvals(expected)) < 1e-10 * np.abs(z).max()
+        aug = np.zeros((n + 1, n + 1), dtype=complex)
+        aug[:n, :n], aug[:n, n], aug[n, n] = A0 + W * A1, W**2 * b, 1j * W
+        G = scipy.linalg.expm(aug * holds[0])[:n, n]
+        rhs = np.r_[G, np.zeros(m - n)]
+        steady = np.linalg.solve(np.exp(1j * W * holds[0]) * np.eye(m) - expected, rhs)
+        np.testing.assert_allclose(x, steady, rtol=0, atol=1e-9 * np.abs(steady).max())
 
 
-def test_hold_stacks_refuse_mismatched_shapes_and_holds() -> None:
+def test_speed_loops_shapes_are_loop_modes() -> None:
+    """With rows R the poles and shapes are those :func:`_core.loop_modes` gives for the same loops."""
+    A0, A1, B, holds, P, L = random_parts(np.random.default_rng(4))
+    R = np.random.default_rng(5).standard_normal((3, L.shape[0]))
+    speeds = np.array([0.0, 300.0, 1200.0])
+    values, shapes, states, loops = _core.speed_loops(A0, A1, B, holds, P, L, speeds, R=R, loops=True)
+    assert states is None
+    expected_values, expected_shapes = _core.loop_modes(loops, R)
+    np.testing.assert_array_equal(values, expected_values)
+    np.testing.assert_array_equal(shapes, expected_shapes)
+
+
+def test_speed_loops_refuse_mismatched_shapes_and_holds() -> None:
+    A0, A1, B, holds, P, L = random_parts(np.random.default_rng(6))
     with pytest.raises(ValueError, match="A0, A1, B"):
-        _core.hold_stacks(np.eye(3), np.eye(2), np.ones((3, 1)), [1e-3], [0.0])
+        _core.speed_loops(A0, A1[:3], B, holds, P, L, [0.0])
     with pytest.raises(ValueError, match="hold"):
-        _core.hold_stacks(np.eye(3), np.eye(3), np.ones((3, 1)), [0.0], [0.0])
+        _core.speed_loops(A0, A1, B, [0.0, 1e-4], P, L, [0.0])
+    with pytest.raises(ValueError, match="P, L"):
+        _core.speed_loops(A0, A1, B, holds[:1], P, L, [0.0])
+    with pytest.raises(ValueError, match="drive"):
+        _core.speed_loops(A0, A1, B, holds, P, L, [0.0], drive=np.ones(3))
 
 
-def test_loop_stack_is_loop_model_with_any_dead_times() -> None:
+def test_speed_loops_are_loop_model_with_any_dead_times() -> None:
     """Every speed's loop as loop_model makes it: axes without dead time, with a fraction of a sample only,
     whole samples only and both (4 kHz: T = 0.25 ms), so the core's holds over T - delta are checked."""
     axes = [replace(af.Rig.paper(), dead_time=d) for d in (0.0, 1e-4, 5e-4, 6e-4)]
     rig = af.RotorRig(af.RotorRig.example().rotor, axes)
     spec = _control.controller_matrix(af.RotorRig.example_controller(), 4)
     speeds = np.array([0.0, 2500.0])
-    stack = _campbell.loop_stack(rig, spec, speeds)
+    stack = _campbell.speed_loops(rig, spec, speeds, loops=True)[3]
     for M, W in zip(stack, speeds):
         expected = _model.loop_model(rig.at_speed(W), spec).M
         np.testing.assert_allclose(M, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
@@ -61,7 +101,8 @@ def test_loop_modes_poles_and_shapes_are_numpys() -> None:
     """Every pole is numpy's; for a simple pole the shape R v is numpy's eigenvector's up to a unit phase; on
     the positive real axis no shape (zero)."""
     rig, pid = af.RotorRig.example(), af.RotorRig.example_controller()
-    stack = _campbell.loop_stack(rig, _control.controller_matrix(pid, 4), np.array([0.0, 700.0, 4000.0]))
+    spec = _control.controller_matrix(pid, 4)
+    stack = _campbell.speed_loops(rig, spec, np.array([0.0, 700.0, 4000.0]), loops=True)[3]
     rng = np.random.default_rng(2)
     stack = np.concatenate([stack, rng.standard_normal((4, stack.shape[1], stack.shape[1]))])
     R = rng.standard_normal((3, stack.shape[1]))

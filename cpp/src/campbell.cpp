@@ -17,28 +17,6 @@ namespace amb_fast {
 
 using cd = std::complex<double>;
 
-void hold_stacks(const RowMatrixXd& A0, const RowMatrixXd& A1, const RowMatrixXd& B, const std::vector<double>& holds,
-                 const double* values, Eigen::Index count, int workers, double* out) {
-    const Eigen::Index n = A0.rows(), k = B.cols(), H = static_cast<Eigen::Index>(holds.size());
-    require(A0.cols() == n && A1.rows() == n && A1.cols() == n && B.rows() == n, "A0, A1, B", n,
-            "n x n, n x n and n x k");
-    for (const double h : holds) require(std::isfinite(h) && h > 0.0, "hold", h, "> 0 (s)");
-    in_blocks(count, 16, workers, [&] {
-        return [&, augmented = Eigen::MatrixXd(n + k, n + k), E = Eigen::MatrixXd(n + k, n + k)](
-                   Eigen::Index begin, Eigen::Index end) mutable {
-            for (Eigen::Index s = begin; s < end; ++s)
-                for (Eigen::Index j = 0; j < H; ++j) {
-                    const double h = holds[static_cast<std::size_t>(j)];
-                    augmented.setZero();
-                    augmented.topLeftCorner(n, n) = (A0 + values[s] * A1) * h;
-                    augmented.topRightCorner(n, k) = B * h;
-                    E = augmented.exp();
-                    Eigen::Map<RowMatrixXd>(out + (s * H + j) * n * (n + k), n, n + k) = E.topRows(n);
-                }
-        };
-    });
-}
-
 namespace {
 
 // The eigenvalues of the upper Hessenberg matrix a (n x n, row-major, overwritten) by Francis double-shift QR
@@ -172,10 +150,10 @@ struct InverseIteration {
 
 // y with H y = lambda y, |y| = 1, by two steps of inverse iteration from the start vector y (H upper
 // Hessenberg, row-major; LU of H - lambda I pivoting between neighbouring rows; a zero pivot made tiny, as
-// LAPACK's hsein). Elementwise loops over real arrays (vectorised where the processor can; no reduction is
-// reordered, so the same digits either way).
+// LAPACK's hsein); with `solve`, y becomes (H - lambda I)^-1 y (one step, not normalised). Elementwise loops over real
+// arrays (vectorised where the processor can; no reduction is reordered, so the same digits either way).
 AMB_FAST_ALWAYS_INLINE void inverse_iteration_kernel(const double* H, Eigen::Index n, double lambda_r, double lambda_i,
-                                                     double tiny, InverseIteration& w) {
+                                                     double tiny, InverseIteration& w, bool solve) {
     double *ur = w.ur.data(), *ui = w.ui.data(), *yr = w.yr.data(), *yi = w.yi.data();
     for (Eigen::Index i = 0; i < n; ++i) {
         for (Eigen::Index j = std::max<Eigen::Index>(i - 1, 0); j < n; ++j)
@@ -200,7 +178,7 @@ AMB_FAST_ALWAYS_INLINE void inverse_iteration_kernel(const double* H, Eigen::Ind
         }
     }
     if (ur[n * n - 1] == 0.0 && ui[n * n - 1] == 0.0) ur[n * n - 1] = tiny;
-    for (int step = 0; step < 2; ++step) {
+    for (int step = 0; step < (solve ? 1 : 2); ++step) {
         for (Eigen::Index j = 0; j + 1 < n; ++j) {
             const auto J = static_cast<std::size_t>(j);
             if (w.swapped[J] != 0.0) std::swap(yr[j], yr[j + 1]), std::swap(yi[j], yi[j + 1]);
@@ -218,6 +196,7 @@ AMB_FAST_ALWAYS_INLINE void inverse_iteration_kernel(const double* H, Eigen::Ind
             yr[i] = (sr * rr[i] + si * ri[i]) / norm;
             yi[i] = (si * rr[i] - sr * ri[i]) / norm;
         }
+        if (solve) break;
         double norm = 0.0;
         for (Eigen::Index i = 0; i < n; ++i) norm += yr[i] * yr[i] + yi[i] * yi[i];
         norm = 1.0 / std::sqrt(norm);
@@ -225,74 +204,194 @@ AMB_FAST_ALWAYS_INLINE void inverse_iteration_kernel(const double* H, Eigen::Ind
     }
 }
 
-void inverse_iteration_portable(const double* H, Eigen::Index n, double lr, double li, double tiny,
-                                InverseIteration& w) {
-    inverse_iteration_kernel(H, n, lr, li, tiny, w);
+void inverse_iteration_portable(const double* H, Eigen::Index n, double lr, double li, double tiny, InverseIteration& w,
+                                bool solve) {
+    inverse_iteration_kernel(H, n, lr, li, tiny, w, solve);
 }
 #if AMB_FAST_WIDE_LANES
 __attribute__((target("avx2"))) void inverse_iteration_avx2(const double* H, Eigen::Index n, double lr, double li,
-                                                            double tiny, InverseIteration& w) {
-    inverse_iteration_kernel(H, n, lr, li, tiny, w);
+                                                            double tiny, InverseIteration& w, bool solve) {
+    inverse_iteration_kernel(H, n, lr, li, tiny, w, solve);
 }
 #else
 constexpr auto inverse_iteration_avx2 = inverse_iteration_portable;
 #endif
+
+// One matrix's eigenvalues and shapes (loop_modes), with its storage kept from one matrix to the next.
+class Modes {
+  public:
+    explicit Modes(Eigen::Index m)
+        : A(m, m), d(m), hessenberg(m), H(m, m), work(m, m), Q(m, m), iteration(m), v(static_cast<std::size_t>(m)) {}
+
+    // A: the matrix (m x m, overwritten by its balanced form). shapes: R v for each eigenvalue (shape[j * m + i]),
+    // or null for the eigenvalues only; `solvable`: keep what `solve` needs.
+    void compute(const RowMatrixXd* R, cd* values, cd* shapes, bool solvable = false) {
+        const Eigen::Index m = A.rows();
+        balance(A, d);
+        hessenberg.compute(A);
+        H = hessenberg.matrixH();
+        work = H;
+        hessenberg_eigenvalues(work.data(), m, values);
+        if (shapes == nullptr && !solvable) return;
+        Q = hessenberg.matrixQ();
+        tiny = std::numeric_limits<double>::epsilon() * std::max(H.cwiseAbs().maxCoeff(), 1e-300);
+        if (shapes == nullptr) return;
+        const Eigen::Index r = R->rows();
+        for (Eigen::Index i = 0; i < m; ++i) {
+            cd* shape = shapes + i;  // shape[j * m]: row j
+            const bool conjugate = values[i].imag() < 0.0 && i > 0 && values[i - 1] == std::conj(values[i]);
+            if (conjugate) {  // the conjugate eigenvalue's vector is the conjugate vector
+                for (Eigen::Index j = 0; j < r; ++j) shape[j * m] = std::conj(shape[j * m - 1]);
+                continue;
+            }
+            if (values[i].imag() == 0.0 && values[i].real() > 0.0) {
+                for (Eigen::Index j = 0; j < r; ++j) shape[j * m] = 0.0;
+                continue;
+            }
+            for (std::size_t j = 0; j < static_cast<std::size_t>(m); ++j) {  // a start vector of its own per index
+                iteration.yr[j] = 1.0 + 0.5 * std::sin(static_cast<double>(static_cast<std::size_t>(i + 1) * (j + 1)));
+                iteration.yi[j] = 0.0;
+            }
+            (simd_avx2() ? inverse_iteration_avx2 : inverse_iteration_portable)(
+                H.data(), m, values[i].real(), values[i].imag(), tiny, iteration, false);
+            double norm = 0.0;  // v = D Q y, of unit norm
+            for (Eigen::Index a = 0; a < m; ++a) {
+                cd sum = 0.0;
+                for (Eigen::Index b = 0; b < m; ++b)
+                    sum += Q(a, b) *
+                           cd(iteration.yr[static_cast<std::size_t>(b)], iteration.yi[static_cast<std::size_t>(b)]);
+                v[static_cast<std::size_t>(a)] = d[a] * sum;
+                norm += std::norm(v[static_cast<std::size_t>(a)]);
+            }
+            norm = std::sqrt(norm);
+            for (Eigen::Index j = 0; j < r; ++j) {
+                cd sum = 0.0;
+                for (Eigen::Index a = 0; a < m; ++a) sum += (*R)(j, a) * v[static_cast<std::size_t>(a)];
+                shape[j * m] = sum / norm;
+            }
+        }
+    }
+
+    // x (m) with (z I - A) x = g (m) for the matrix last computed (solvable): through its Hessenberg form,
+    // A = D Q H Q^T D^-1, in O(m^2) beyond it ((H - z I) w = -Q^T D^-1 g, x = D Q w).
+    void solve(cd z, const cd* g, cd* x) {
+        const Eigen::Index m = A.rows();
+        for (Eigen::Index b = 0; b < m; ++b) {
+            cd sum = 0.0;
+            for (Eigen::Index a = 0; a < m; ++a) sum += Q(a, b) * (g[a] / d[a]);
+            iteration.yr[static_cast<std::size_t>(b)] = -sum.real();
+            iteration.yi[static_cast<std::size_t>(b)] = -sum.imag();
+        }
+        (simd_avx2() ? inverse_iteration_avx2 : inverse_iteration_portable)(H.data(), m, z.real(), z.imag(), tiny,
+                                                                            iteration, true);
+        for (Eigen::Index a = 0; a < m; ++a) {
+            cd sum = 0.0;
+            for (Eigen::Index b = 0; b < m; ++b)
+                sum +=
+                    Q(a, b) * cd(iteration.yr[static_cast<std::size_t>(b)], iteration.yi[static_cast<std::size_t>(b)]);
+            x[a] = d[a] * sum;
+        }
+    }
+
+    Eigen::MatrixXd A;
+
+  private:
+    double tiny = 0.0;
+    Eigen::VectorXd d;
+    Eigen::HessenbergDecomposition<Eigen::MatrixXd> hessenberg;
+    RowMatrixXd H, work;
+    Eigen::MatrixXd Q;
+    InverseIteration iteration;
+    std::vector<cd> v;
+};
 
 }  // namespace
 
 void loop_modes(const double* stack, Eigen::Index count, Eigen::Index m, const RowMatrixXd& R, int workers, cd* values,
                 cd* shapes) {
     require(R.cols() == m, "R", R.cols(), "m columns (one per state)");
-    const Eigen::Index r = R.rows();
-    const auto M = static_cast<std::size_t>(m);
     in_blocks(count, 8, workers, [&] {
-        return [&, hessenberg = Eigen::HessenbergDecomposition<Eigen::MatrixXd>(m), work = RowMatrixXd(m, m),
-                H = RowMatrixXd(m, m), iteration = InverseIteration(m), v = std::vector<cd>(M),
-                Q = Eigen::MatrixXd(m, m)](Eigen::Index begin, Eigen::Index end) mutable {
+        return [&, modes = Modes(m)](Eigen::Index begin, Eigen::Index end) mutable {
             for (Eigen::Index s = begin; s < end; ++s) {
-                const Eigen::MatrixXd A = Eigen::Map<const RowMatrixXd>(stack + s * m * m, m, m);
-                const Eigen::VectorXd d = balancing(A);
-                hessenberg.compute(d.cwiseInverse().asDiagonal() * A * d.asDiagonal());
-                H = hessenberg.matrixH();
-                Q = hessenberg.matrixQ();
-                cd* value = values + s * m;
-                work = H;
-                hessenberg_eigenvalues(work.data(), m, value);
-                const double tiny = std::numeric_limits<double>::epsilon() * std::max(H.cwiseAbs().maxCoeff(), 1e-300);
-                for (Eigen::Index i = 0; i < m; ++i) {
-                    cd* shape = shapes + s * r * m + i;  // shape[j * m]: row j
-                    const bool conjugate = value[i].imag() < 0.0 && i > 0 && value[i - 1] == std::conj(value[i]);
-                    if (conjugate) {  // the conjugate eigenvalue's vector is the conjugate vector
-                        for (Eigen::Index j = 0; j < r; ++j) shape[j * m] = std::conj(shape[j * m - 1]);
-                        continue;
+                modes.A = Eigen::Map<const RowMatrixXd>(stack + s * m * m, m, m);
+                modes.compute(&R, values + s * m, shapes + s * R.rows() * m);
+            }
+        };
+    });
+}
+
+void speed_loops(const SpeedLoops& in, const double* values_p, Eigen::Index count, int workers, double* loops,
+                 cd* values, cd* shapes, cd* states) {
+    const Eigen::Index n = in.A0.rows(), k = in.B.cols(), H = static_cast<Eigen::Index>(in.holds.size());
+    const Eigen::Index m = in.L.rows(), r = in.R.rows();
+    const bool driven = in.drive.size() > 0, shaped = r > 0;
+    require(in.A0.cols() == n && in.A1.rows() == n && in.A1.cols() == n && in.B.rows() == n, "A0, A1, B", n,
+            "n x n, n x n and n x k");
+    require(H >= 1, "holds", H, "at least the sample period");
+    for (const double h : in.holds) require(std::isfinite(h) && h > 0.0, "hold", h, "> 0 (s)");
+    require(in.P.rows() == n + k * H && in.P.cols() == m && in.L.cols() == m && m >= n, "P, L", m,
+            "(n + k holds) x m and m x m");
+    require(!driven || in.drive.size() == n, "drive", in.drive.size(), "n entries (one per plant state)");
+    require(!shaped || in.R.cols() == m, "R", in.R.cols(), "m columns (one per state)");
+    require(!shaped || shapes != nullptr, "shapes", 0, "storage for the shapes");
+    require(!driven || states != nullptr, "states", 0, "storage for the steady states");
+    const double T = in.holds[0];
+    const Eigen::Index size = n + k + (driven ? 2 : 0);
+    // The exponentials of D^-1 X D = D^-1 e^X D, D the powers of two balancing the plant at p = 0 (exact in
+    // floating point): the balanced matrix's smaller norm takes fewer squarings. scaled(i, j) = d_j / d_i.
+    Eigen::MatrixXd scaled = Eigen::MatrixXd::Ones(size, size);
+    {
+        Eigen::MatrixXd X = Eigen::MatrixXd::Zero(n + k, n + k);
+        X.topLeftCorner(n, n) = in.A0 * T;
+        X.topRightCorner(n, k) = in.B * T;
+        Eigen::VectorXd d;
+        balance(X, d);
+        for (Eigen::Index i = 0; i < n + k; ++i)
+            for (Eigen::Index j = 0; j < size; ++j) scaled(i, j) = (j < n + k ? d[j] : 1.0) / d[i];
+    }
+    in_blocks(count, 8, workers, [&] {
+        return [&, size, augmented = Eigen::MatrixXd(size, size), E = Eigen::MatrixXd(size, size),
+                X = RowMatrixXd(n, n + k * H), M = RowMatrixXd(m, m), modes = Modes(m),
+                x = Eigen::VectorXcd(m)](Eigen::Index begin, Eigen::Index end) mutable {
+            for (Eigen::Index s = begin; s < end; ++s) {
+                const double p = values_p[s];
+                for (Eigen::Index j = 0; j < H; ++j) {
+                    const double h = in.holds[static_cast<std::size_t>(j)];
+                    const bool drives = driven && j == 0;  // the force over the sample only
+                    const Eigen::Index e = drives ? size : n + k;
+                    auto aug = augmented.topLeftCorner(e, e);
+                    aug.setZero();
+                    aug.topLeftCorner(n, n) = (in.A0 + p * in.A1) * h;
+                    aug.block(0, n, n, k) = in.B * h;
+                    if (drives) {  // the force's phasor as a 2-state oscillator (cos p t, sin p t): Re G, -Im G
+                        aug.col(n + k).head(n) = (p * p * h) * in.drive.real();
+                        aug.col(n + k + 1).head(n) = -(p * p * h) * in.drive.imag();
+                        aug(n + k, n + k + 1) = -p * h;
+                        aug(n + k + 1, n + k) = p * h;
                     }
-                    if (value[i].imag() == 0.0 && value[i].real() > 0.0) {
-                        for (Eigen::Index j = 0; j < r; ++j) shape[j * m] = 0.0;
-                        continue;
+                    aug.array() *= scaled.topLeftCorner(e, e).array();
+                    double force = 1.0;  // the force's columns scaled (a power of two) to no more than unit size
+                    if (drives) {
+                        const double size = aug.block(0, n + k, n, 2).cwiseAbs().colwise().sum().maxCoeff();
+                        if (size > 1.0) force = std::exp2(std::ceil(std::log2(size)));
+                        aug.block(0, n + k, n, 2) /= force;
                     }
-                    for (std::size_t j = 0; j < M; ++j) {  // a start vector of its own per index
-                        iteration.yr[j] =
-                            1.0 + 0.5 * std::sin(static_cast<double>(static_cast<std::size_t>(i + 1) * (j + 1)));
-                        iteration.yi[j] = 0.0;
+                    E.topLeftCorner(e, e) = aug.exp();
+                    E.topLeftCorner(e, e).array() /= scaled.topLeftCorner(e, e).array();
+                    if (drives) E.block(0, n + k, n, 2) *= force;
+                    if (j == 0) X.leftCols(n) = E.topLeftCorner(n, n);
+                    if (drives) {  // G_p = Re G + j Im G, and the loop's drive [G_p; 0]
+                        x.setZero();
+                        for (Eigen::Index i = 0; i < n; ++i) x[i] = cd(E(i, n + k), -E(i, n + k + 1));
                     }
-                    (simd_avx2() ? inverse_iteration_avx2 : inverse_iteration_portable)(
-                        H.data(), m, value[i].real(), value[i].imag(), tiny, iteration);
-                    double norm = 0.0;  // v = D Q y, of unit norm
-                    for (Eigen::Index a = 0; a < m; ++a) {
-                        cd sum = 0.0;
-                        for (Eigen::Index b = 0; b < m; ++b)
-                            sum += Q(a, b) * cd(iteration.yr[static_cast<std::size_t>(b)],
-                                                iteration.yi[static_cast<std::size_t>(b)]);
-                        v[static_cast<std::size_t>(a)] = d[a] * sum;
-                        norm += std::norm(v[static_cast<std::size_t>(a)]);
-                    }
-                    norm = std::sqrt(norm);
-                    for (Eigen::Index j = 0; j < r; ++j) {
-                        cd sum = 0.0;
-                        for (Eigen::Index a = 0; a < m; ++a) sum += R(j, a) * v[static_cast<std::size_t>(a)];
-                        shape[j * m] = sum / norm;
-                    }
+                    X.middleCols(n + j * k, k) = E.block(0, n, n, k);
                 }
+                M = in.L;
+                M.topRows(n).noalias() += X * in.P;
+                if (loops != nullptr) Eigen::Map<RowMatrixXd>(loops + s * m * m, m, m) = M;
+                modes.A = M;
+                modes.compute(&in.R, values + s * m, shaped ? shapes + s * r * m : nullptr, driven);
+                if (driven) modes.solve(std::polar(1.0, p * T), x.data(), states + s * m);
             }
         };
     });

@@ -79,10 +79,9 @@ Eigen::MatrixXd covariance_root(const Eigen::MatrixXd& P) {
     return scale.asDiagonal() * (ldlt.transpositionsP().transpose() * (L * d.asDiagonal()));
 }
 
-Eigen::VectorXd balancing(const Eigen::MatrixXd& M) {
-    const Eigen::Index n = M.rows();
-    Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
-    Eigen::MatrixXd B = M;
+void balance(Eigen::MatrixXd& B, Eigen::VectorXd& d) {
+    const Eigen::Index n = B.rows();
+    d.setOnes(n);
     for (bool changed = true; changed;) {
         changed = false;
         for (Eigen::Index i = 0; i < n; ++i) {
@@ -101,6 +100,12 @@ Eigen::VectorXd balancing(const Eigen::MatrixXd& M) {
             B.row(i) /= f;
         }
     }
+}
+
+Eigen::VectorXd balancing(const Eigen::MatrixXd& M) {
+    Eigen::MatrixXd B = M;
+    Eigen::VectorXd d;
+    balance(B, d);
     return d;
 }
 

@@ -14,6 +14,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "amb_fast/batch.hpp"
+#include "amb_fast/campbell.hpp"
 #include "amb_fast/errors.hpp"
 #include "amb_fast/estimate2x2.hpp"
 #include "amb_fast/experiment.hpp"
@@ -636,6 +637,68 @@ int main() {
                    std::equal(e.var_im.begin(), e.var_im.end(), var_im.begin() + at) && std::isfinite(e.var_re[0]);
         }
         check(same, "two-axis sweep on two threads equals each point alone bit for bit");
+    }
+
+    {  // speed_loops: a damped oscillator whose damping grows with p, under state feedback, against the
+       // hold, force integral and steady state written with A's eigenvectors (no matrix exponential).
+        const double T = 2.5e-4, w0 = 2.0 * M_PI * 60.0, k1 = 3e4, k2 = 20.0;
+        SpeedLoops in;
+        in.A0.resize(2, 2), in.A1.resize(2, 2), in.B.resize(2, 1), in.P.resize(3, 2);
+        in.A0 << 0.0, 1.0, -w0 * w0, -5.0;
+        in.A1 << 0.0, 0.0, 0.0, -0.01;
+        in.B << 0.0, 1.0;
+        in.holds = {T};
+        in.P << 1.0, 0.0, 0.0, 1.0, -k1, -k2;  // M = Phi - Gamma [k1 k2]
+        in.L = RowMatrixXd::Zero(2, 2);
+        in.drive = Eigen::VectorXcd::Zero(2);
+        in.drive[1] = cd(0.3, -0.2);
+        in.R = RowMatrixXd::Identity(2, 2);
+        const std::vector<double> speeds = {0.0, 150.0, 900.0, 2000.0, 3000.0, 4100.0, 5000.0, 7000.0, 8000.0};
+        const auto count = static_cast<Eigen::Index>(speeds.size());
+        std::vector<double> loops(static_cast<std::size_t>(count * 4));
+        std::vector<cd> values(static_cast<std::size_t>(count * 2)), shapes(values.size() * 2), states(values.size());
+        speed_loops(in, speeds.data(), count, 2, loops.data(), values.data(), shapes.data(), states.data());
+        double worst_loop = 0.0, worst_value = 0.0, worst_state = 0.0, worst_shape = 0.0;
+        for (Eigen::Index s = 0; s < count; ++s) {
+            const double p = speeds[static_cast<std::size_t>(s)];
+            const Eigen::Matrix2d A = in.A0 + p * in.A1;
+            Eigen::ComplexEigenSolver<Eigen::Matrix2cd> eig(A.cast<cd>());
+            const Eigen::Matrix2cd V = eig.eigenvectors(), Vi = V.inverse();
+            const Eigen::Vector2cd lambda = eig.eigenvalues(), e = (lambda * T).array().exp();
+            const Eigen::Matrix2d Phi = (V * e.asDiagonal() * Vi).real();
+            const Eigen::Vector2cd c = Vi * in.B.cast<cd>().col(0);
+            const Eigen::Vector2d Gamma =
+                (V * ((e.array() - 1.0) / lambda.array() * c.array()).matrix()).real();  // int_0^T e^{As} B ds
+            Eigen::Matrix2d M = Phi - Gamma * Eigen::RowVector2d(k1, k2);
+            const cd jp(0.0, p), z = std::exp(jp * T);
+            const Eigen::Vector2cd f = Vi * (p * p * in.drive);  // int_0^T e^{A(T-s)} f e^{jps} ds
+            const Eigen::Vector2cd G = V * ((z - e.array()) / (jp - lambda.array()) * f.array()).matrix();
+            const Eigen::Map<const RowMatrixXd> got(loops.data() + s * 4, 2, 2);
+            worst_loop = std::max(worst_loop, (got - M).cwiseAbs().maxCoeff() / M.cwiseAbs().maxCoeff());
+            const Eigen::Vector2cd expected = Eigen::EigenSolver<Eigen::Matrix2d>(M).eigenvalues();
+            const cd* v = values.data() + s * 2;
+            worst_value = std::max(worst_value, std::min(std::abs(v[0] - expected[0]) + std::abs(v[1] - expected[1]),
+                                                         std::abs(v[0] - expected[1]) + std::abs(v[1] - expected[0])));
+            const Eigen::Map<const Eigen::Vector2cd> x(states.data() + s * 2);
+            worst_state = std::max(worst_state, ((z * x - M.cast<cd>() * x) - G).norm() / G.norm());
+            for (int i = 0; i < 2; ++i) {  // R = I: each shape is the unit eigenvector
+                const Eigen::Vector2cd u(shapes[static_cast<std::size_t>(s * 4 + i)],
+                                         shapes[static_cast<std::size_t>(s * 4 + 2 + i)]);
+                worst_shape = std::max(worst_shape, (M.cast<cd>() * u - v[i] * u).norm() + std::abs(u.norm() - 1.0));
+            }
+        }
+        check(worst_loop < 1e-12, "speed_loops' loops are the exact holds (" + std::to_string(worst_loop) + ")");
+        check(worst_value < 1e-12, "speed_loops' poles are the loops' eigenvalues");
+        check(worst_state < 1e-10,
+              "speed_loops' steady states solve (zI - M) x = [G; 0] (" + std::to_string(worst_state) + ")");
+        check(worst_shape < 1e-10, "speed_loops' shapes are unit eigenvectors");
+        check_throws<std::invalid_argument>(
+            [&] {
+                SpeedLoops bad = in;
+                bad.P.resize(2, 2);
+                speed_loops(bad, speeds.data(), 1, 1, nullptr, values.data(), nullptr, states.data());
+            },
+            "speed_loops refuses a P of the wrong size");
     }
 
     std::printf("%d passed, %d failed\n", passed, failed);

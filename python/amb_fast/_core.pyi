@@ -149,9 +149,19 @@ def run_sweep(
 def eigenvalues(stack: ArrayLike, workers: int = 1) -> np.ndarray: ...
 
 # Campbell diagrams: the sampled loop at many speeds, its poles and their shapes at a few rows.
-def hold_stacks(
-    A0: ArrayLike, A1: ArrayLike, B: ArrayLike, holds: Sequence[float], values: ArrayLike, workers: int = 1
-) -> np.ndarray: ...
+def speed_loops(
+    A0: ArrayLike,
+    A1: ArrayLike,
+    B: ArrayLike,
+    holds: ArrayLike,
+    P: ArrayLike,
+    L: ArrayLike,
+    speeds: ArrayLike,
+    R: ArrayLike | None = None,
+    drive: ArrayLike | None = None,
+    loops: bool = False,
+    workers: int = 1,
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, np.ndarray | None]: ...
 def loop_modes(stack: ArrayLike, R: ArrayLike, workers: int = 1) -> tuple[np.ndarray, np.ndarray]: ...
 
 # Two axes (amb_fast.two_axis): the generic dense MIMO loop.

@@ -10,11 +10,30 @@ namespace amb_fast {
 
 using RowMatrixXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
-// The exact zero-order holds of a plant affine in one parameter p: for each of `count` values p and each of
-// the hold lengths h (s), [Phi | Gamma] = the top n rows of the matrix exponential of [[A h, B h], [0, 0]]
-// for A = A0 + p A1 (n x n), B (n x k). out: (count, holds, n, n + k), row-major.
-void hold_stacks(const RowMatrixXd& A0, const RowMatrixXd& A1, const RowMatrixXd& B, const std::vector<double>& holds,
-                 const double* values, Eigen::Index count, int workers, double* out);
+// The sampled loop of a plant affine in one parameter p (the rotor's speed), at many values of p.
+// The plant A = A0 + p A1 (n x n) with its commands B (n x k) is held over each of `holds` (s; holds[0] the
+// sample period T): X = [Phi(T) | Gamma(T) | Gamma(holds[1]) | ...] (n x (n + k H)), Phi and Gamma the top
+// rows of the exponential of [[A h, B h], [0, 0]]. The loop (m x m) is L + X P in its top n rows and L
+// below (P: (n + k H) x m, the dead-time lines and the controller; L's top n rows are zero).
+struct SpeedLoops {
+    RowMatrixXd A0, A1, B;
+    std::vector<double> holds;
+    RowMatrixXd P, L;
+    // Optional: a force rotating at p rad/s, Re(p^2 drive e^{j p t}) on the plant's state (n, complex; empty:
+    // none), integrated exactly over the sample in the same exponential (the plant's input G_p = the top
+    // rows of its oscillator's columns), and the loop's steady state x (m) at z = e^{j p T}:
+    // (z I - M) x = [G_p; 0].
+    Eigen::VectorXcd drive;
+    // Optional: the rows R (r x m) of the poles' shapes (`loop_modes`); empty: eigenvalues only.
+    RowMatrixXd R;
+};
+
+// Per value p (one per task, on `workers` threads): the loop (loops: (count, m, m), if not null), its
+// eigenvalues (values: (count, m), balanced, by Francis QR on the Hessenberg form), their shapes if R is
+// given (shapes: (count, r, m), as `loop_modes`) and the steady state if a drive is given (states:
+// (count, m)). No other allocation per value.
+void speed_loops(const SpeedLoops& in, const double* values_p, Eigen::Index count, int workers, double* loops,
+                 std::complex<double>* values, std::complex<double>* shapes, std::complex<double>* states);
 
 // For each of `count` real m x m matrices (stack: row-major, one after the other): its eigenvalues
 // (values[k * m + i], balanced as `eigenvalues` does) and, for each eigenvalue with a non-zero angle, R v

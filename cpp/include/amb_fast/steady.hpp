@@ -27,6 +27,8 @@ struct ClosedLoopMap {
 // Reinsch, as LAPACK's gebal): exact in floating point. Without it, orthogonal reductions (Hessenberg,
 // QR) mix states of very different scales (m, m/s, A) and lose their small digits.
 Eigen::VectorXd balancing(const Eigen::MatrixXd& M);
+// The same in place: B becomes D^-1 B D, d the powers of two (no allocation once d has B's size).
+void balance(Eigen::MatrixXd& B, Eigen::VectorXd& d);
 
 // M^N by repeated squaring (log2 N products).
 Eigen::MatrixXd matrix_power(const Eigen::MatrixXd& M, Eigen::Index N);

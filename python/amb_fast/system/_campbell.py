@@ -154,47 +154,49 @@ def speed_plant(rig: RotorRig) -> tuple[np.ndarray, np.ndarray, np.ndarray, Layo
     return A0, plant(rig.at_speed(1.0))[0] - A0, B, layout
 
 
-def loop_stack(rig: RotorRig, controller: ControllerMatrix, speeds: np.ndarray) -> np.ndarray:
-    """The closed loop's matrix at each speed, (speeds, n, n), as :func:`loop_model` makes it (the same states).
-
-    The continuous plant is affine in the speed (only the gyroscopic term moves), so the core discretises
-    every speed (on its threads) from the plant at rest and its gyroscopic rows per rad/s, over the sample
-    and, for a fractional dead time ``delta``, over ``T - delta``: ``G0 = Gamma_u(T - delta)`` and
-    ``G1 = Phi(T - delta) Gamma_u(delta) = Gamma_u(T) - Gamma_u(T - delta)`` (:func:`discrete_plant`'s
-    columns); the command lines and the controller are the same at every speed."""
+def _loop_parts(
+    rig: RotorRig, controller: ControllerMatrix
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`loop_model`'s loop as :func:`_core.speed_loops` takes it: ``A0``, ``A1``, the commands' ``B``, the holds
+    ``[T, T - delta, ...]`` (per fractional dead time ``delta``: its command enters as ``G0 = Gamma(T - delta)``
+    and a sample late as ``Gamma(T) - G0``), ``P`` and ``L`` (the lines and the controller, at every speed)."""
     A0, A1, B, _ = speed_plant(rig)
     n, N = A0.shape[0], B.shape[1] // 2
-    T = 1.0 / controller.fs
     splits = [split_dead_time(axis.dead_time, controller.fs) for axis in rig.axes]
     fractions = sorted({f for _, f in splits if f > 0})
-    E = _core.hold_stacks(A0, A1, B[:, N:], [T] + [T - f for f in fractions], speeds, _workers(speeds.size))
-    Gamma = E[:, 0, :, n:]
     lines = [m + (f > 0) for m, f in splits]
-    size = n + sum(lines)
-    Phi, Gu = np.zeros((speeds.size, size, size)), np.zeros((speeds.size, size, N))
-    Phi[:, :n, :n] = E[:, 0, :, :n]
+    size, width = n + sum(lines), n + N * (1 + len(fractions))
+    # Rows [0, width): the plant's rows in terms of the columns of [Phi | Gamma ...]; then the lines' rows.
+    Phi, Gu = np.zeros((width + size - n, size)), np.zeros((width + size - n, N))
+    Phi[:n, :n] = np.eye(n)
     at = n
     for a, ((whole, f), line) in enumerate(zip(splits, lines)):
-        G0 = E[:, 1 + fractions.index(f), :, n + a] if f > 0 else Gamma[:, :, a]
+        G0 = np.zeros(width)
+        G0[n + N * (1 + fractions.index(f)) + a if f > 0 else n + a] = 1.0
         if whole == 0:
-            Gu[:, :n, a] = G0
+            Gu[:width, a] = G0
         else:
-            Phi[:, :n, at + whole - 1] = G0
+            Phi[:width, at + whole - 1] = G0
         if f > 0:
-            Phi[:, :n, at + line - 1] = Gamma[:, :, a] - G0
+            Phi[:width, at + line - 1] -= G0
+            Phi[n + a, at + line - 1] += 1.0  # Gamma(T) - G0
         if line:
-            Gu[:, at, a] = 1.0  # <axis>.dead1' = u
-            Phi[:, at : at + line, at : at + line] = np.eye(line, k=-1)
+            Gu[width + at - n, a] = 1.0  # <axis>.dead1' = u
+            Phi[width + at - n : width + at - n + line, at : at + line] = np.eye(line, k=-1)
         at += line
     Ac, Bc, Cc, Dc = controller_state_space(controller)
     S = np.zeros((N, size))
     S[:, :n] = sensor_rows(rig)
-    M = np.empty((speeds.size, size + Ac.shape[0], size + Ac.shape[0]))
-    M[:, :size, :size] = Phi + Gu @ (Dc @ S)
-    M[:, :size, size:] = Gu @ Cc
-    M[:, size:, :size] = Bc @ S
-    M[:, size:, size:] = Ac
-    return M
+    closed = np.hstack([Phi + Gu @ (Dc @ S), Gu @ Cc])
+    L = np.vstack([np.zeros((n, closed.shape[1])), closed[width:], np.hstack([Bc @ S, Ac])])
+    T = 1.0 / controller.fs
+    return A0, A1, B[:, N:], np.array([T] + [T - f for f in fractions]), closed[:width], L
+
+
+def speed_loops(rig: RotorRig, controller: ControllerMatrix, speeds: np.ndarray, **options: Any) -> tuple:
+    """:func:`_core.speed_loops` for ``rig`` under ``controller`` at ``speeds`` (rad/s), on the core's threads:
+    the poles and, as ``options`` ask (else None), shapes, steady states and the loops (:func:`loop_model`'s)."""
+    return _core.speed_loops(*_loop_parts(rig, controller), speeds, workers=_workers(speeds.size), **options)
 
 
 def campbell(rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike) -> Campbell:
@@ -209,9 +211,9 @@ def campbell(rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike) -> Ca
             "a 1-D array of finite speeds, rad/s")  # fmt: skip
     spec = controller_matrix(controller, 4)
     fs = spec.fs
-    M = loop_stack(rig, spec, W)
-    R, F = _bearing_form(rig, M.shape[1])
-    values, shapes = _core.loop_modes(M, R, _workers(W.size))
+    parts = _loop_parts(rig, spec)
+    R, F = _bearing_form(rig, parts[-1].shape[0])
+    values, shapes, _, _ = _core.speed_loops(*parts, W, R=R, workers=_workers(W.size))
     order = np.argsort(np.abs(np.angle(values)), axis=1, kind="stable")
     values = np.take_along_axis(values, order, axis=1)
     shapes = np.take_along_axis(shapes, order[:, None, :], axis=2)

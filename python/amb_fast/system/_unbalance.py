@@ -17,11 +17,10 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike
 
-from .._blas import one_blas_thread
 from .._equality import ArrayRecord
-from .._linear import checked_poles, eigenvalues
+from .._linear import checked_poles
 from .._validate import real, require
-from ._campbell import loop_stack, speed_plant
+from ._campbell import speed_loops, speed_plant
 from ._control import ControllerSpec, controller_matrix
 from ._model import loop_model, plant, require_stable
 from ._rotor import RotorRig
@@ -91,27 +90,27 @@ def _unbalance_forces(rig: RotorRig, unbalance: Any) -> list[tuple[np.ndarray, c
     return out
 
 
-def _drives(rig: RotorRig, sources: list[tuple[np.ndarray, complex]], speeds: np.ndarray, T: float) -> np.ndarray:
-    """``G_W f`` at each speed ``W``: what one sample of the rotating force ``Re(f e^{jWt})`` adds to the plant's
-    state from ``t = 0``, (speeds, plant states) complex, integrated exactly in one batched exponential (the
-    plant is affine in the speed, as in :func:`loop_stack`; the force grows as ``W^2``)."""
-    A0, A1, _, lay = speed_plant(rig)
-    mech, n = rig.mechanics(), A0.shape[0]
+def _drive(rig: RotorRig, sources: list[tuple[np.ndarray, complex]]) -> np.ndarray:
+    """``b`` (plant states,) complex: the rotating force ``Re(W^2 b e^{jWt})`` on the plant's state (the
+    accelerations of the unbalances' forces per (rad/s)^2)."""
+    A0, _, _, lay = speed_plant(rig)
+    mech = rig.mechanics()
     Mt = mech.mass + mech.actuators.T @ np.diag([a.mass_loading for a in rig.axes]) @ mech.actuators
-    b = np.zeros(n, dtype=complex)
+    b = np.zeros(A0.shape[0], dtype=complex)
     b[list(lay.velocity)] = np.linalg.solve(Mt, sum(me * direction for direction, me in sources))
-    # Real arithmetic (4x cheaper): the force's phasor as a 2-state oscillator (cos W t, sin W t), whose
-    # columns give Re G and -Im G.
-    augmented = np.zeros((speeds.size, n + 2, n + 2))
-    augmented[:, :n, :n] = (A0 + speeds[:, None, None] * A1) * T
-    augmented[:, :n, n] = (speeds**2 * T)[:, None] * b.real
-    augmented[:, :n, n + 1] = -(speeds**2 * T)[:, None] * b.imag
-    augmented[:, n, n + 1], augmented[:, n + 1, n] = -speeds * T, speeds * T
-    E = scipy.linalg.expm(augmented)
-    return E[:, :n, n] - 1j * E[:, :n, n + 1]
+    return b
 
 
-@one_blas_thread  # hundreds of small exponentials and solves: BLAS threads only spin on them
+def _drives(rig: RotorRig, sources: list[tuple[np.ndarray, complex]], speed: float, T: float) -> np.ndarray:
+    """``G_W f``: what one sample of the rotating force ``Re(f e^{jWt})`` adds to the plant's state from
+    ``t = 0`` at the speed ``W``, (plant states,) complex, integrated exactly in one exponential."""
+    A0, A1, _, _ = speed_plant(rig)
+    n = A0.shape[0]
+    augmented = np.zeros((n + 1, n + 1), dtype=complex)
+    augmented[:n, :n], augmented[:n, n], augmented[n, n] = A0 + speed * A1, speed**2 * _drive(rig, sources), 1j * speed
+    return scipy.linalg.expm(augmented * T)[:n, n]
+
+
 def unbalance_response(
     rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike, unbalance: Any
 ) -> UnbalanceResponse:
@@ -120,30 +119,25 @@ def unbalance_response(
     :class:`FlexibleRotor` ``z`` is a node's axial position, :attr:`FlexibleRotor.positions`).
 
     A speed at which the loop is unstable is refused (:class:`UnstableLoopError`, naming it): there is no
-    steady response there; :func:`campbell` finds such speeds. All speeds are solved at once (the loops
-    and drives in batched exponentials, the steady states in one batched solve)."""
+    steady response there; :func:`campbell` finds such speeds. Every speed's loop, force, poles and steady
+    state come from one exponential, eigenvalue problem and solve in the core, on its threads."""
     require(isinstance(rig, RotorRig), "rig", type(rig).__name__, "a RotorRig")
     W = np.atleast_1d(np.asarray(speeds, dtype=float))
     require(W.ndim == 1 and W.size >= 1 and bool(np.all(np.isfinite(W))), "speeds", speeds,
             "a 1-D array of finite speeds, rad/s")  # fmt: skip
     spec = controller_matrix(controller, 4)
-    fs, T = spec.fs, 1.0 / spec.fs
+    fs = spec.fs
     require(
         bool(np.all(np.abs(W) < np.pi * fs)), "speeds", speeds, f"below the Nyquist rate pi fs = {np.pi * fs:g} rad/s"
     )
     sources = _unbalance_forces(rig, unbalance)
-    M = loop_stack(rig, spec, W)
-    poles = eigenvalues(M)  # the core's, as every stability check of a run
+    poles, _, X, _ = speed_loops(rig, spec, W, drive=_drive(rig, sources))  # X: the state, X z^k at sample k
     unstable = np.flatnonzero(np.any(np.abs(poles) >= 1.0, axis=1))
     if unstable.size:
         first = float(W[unstable[0]])
         checked_poles(poles[unstable[0]], lambda: f"the closed loop at speed {first:g} rad/s is unstable")
     _, _, lay = plant(rig)
     model = loop_model(rig, spec)  # its output rows C do not depend on the speed
-    drive = np.zeros(M.shape[:2], dtype=complex)
-    drive[:, : len(lay.names)] = _drives(rig, sources, W, T)
-    z = np.exp(1j * W * T)[:, None, None]
-    X = np.linalg.solve(z * np.eye(M.shape[1]) - M, drive[..., None])[..., 0]  # the state: X z^k at sample k
     probes, currents = X @ model.C[:4].T, X @ model.C[4:].T
     d = X[:, list(lay.position)] @ rig.mechanics().actuators.T
     i_f = np.stack([X[:, lay.eddy[j]] if lay.eddy[j] >= 0 else X[:, lay.coil[j]] if lay.coil[j] >= 0
@@ -176,7 +170,7 @@ def with_unbalance(
     require_stable(system, controller, f"the closed loop at speed {speed:g} rad/s")
     model = loop_model(system, controller)
     T = 1.0 / model.fs
-    G = _drives(system, _unbalance_forces(system, unbalance), np.array([speed]), T)[0]
+    G = _drives(system, _unbalance_forces(system, unbalance), speed, T)
     s, n, N = model.M.shape[0], G.size, model.Bf.shape[1]
     M = np.zeros((s + 2, s + 2))
     M[:s, :s] = model.M
