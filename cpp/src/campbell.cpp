@@ -21,14 +21,18 @@ namespace {
 
 // The eigenvalues of the upper Hessenberg matrix a (n x n, row-major, overwritten) by Francis double-shift QR
 // steps on the active window only (EISPACK's hqr): no Schur form, no vectors. A complex pair comes as
-// (x + j z, x - j z), z > 0.
-void hessenberg_eigenvalues(double* a, Eigen::Index n, cd* values) {
+// (x + j z, x - j z), z > 0. `guess` (n, or null): a nearby matrix's eigenvalues as this function gave them
+// (the previous speed's): the first step at each bottom row nn takes guess[nn] and its neighbour as its shifts
+// instead of the trailing 2 x 2's, so a pole that barely moved deflates in about one step. A poor guess
+// costs one step per row; the standard shifts follow, so convergence is as without.
+void hessenberg_eigenvalues(double* a, Eigen::Index n, cd* values, const cd* guess = nullptr) {
     const auto at = [&](Eigen::Index i, Eigen::Index j) -> double& { return a[i * n + j]; };
     const auto sign = [](double x, double y) { return y >= 0.0 ? std::abs(x) : -std::abs(x); };
     const double eps = std::numeric_limits<double>::epsilon();
     double norm = 0.0;
     for (Eigen::Index i = 0; i < n; ++i)
         for (Eigen::Index j = std::max<Eigen::Index>(i - 1, 0); j < n; ++j) norm += std::abs(at(i, j));
+    Eigen::Index warmed = n;  // the last bottom row given the guess's shifts
     Eigen::Index nn = n - 1, l = 0;
     double t = 0.0;  // the exceptional shifts' sum
     while (nn >= 0) {
@@ -70,6 +74,17 @@ void hessenberg_eigenvalues(double* a, Eigen::Index n, cd* values) {
                 const double s = std::abs(at(nn, nn - 1)) + std::abs(at(nn - 1, nn - 2));
                 y = x = 0.75 * s;
                 w = -0.4375 * s * s;
+            } else if (guess != nullptr && warmed != nn) {  // the guess's shifts, once per bottom row
+                warmed = nn;
+                const cd g = guess[nn], h = guess[nn - 1];
+                if (g.imag() != 0.0) {  // a complex pair: x = y = Re g, x y - w = |g|^2
+                    y = x = g.real() - t;
+                    w = -g.imag() * g.imag();
+                } else {  // two real shifts: g and its neighbour if real, else g twice
+                    x = g.real() - t;
+                    y = (h.imag() == 0.0 ? h.real() : g.real()) - t;
+                    w = 0.0;
+                }
             }
             ++its;
             Eigen::Index m = nn - 2;
@@ -264,14 +279,15 @@ class Modes {
     }
 
     // A: the matrix (m x m, overwritten by its balanced form). shapes: R v for each eigenvalue (shape[j * m + i]),
-    // or null for the eigenvalues only; `solvable`: keep what `solve` needs.
-    void compute(const RowMatrixXd* R, cd* values, cd* shapes, bool solvable = false) {
+    // or null for the eigenvalues only; `solvable`: keep what `solve` needs; guess: the previous (nearby)
+    // matrix's values, or null (hessenberg_eigenvalues).
+    void compute(const RowMatrixXd* R, cd* values, cd* shapes, bool solvable, const cd* guess) {
         const Eigen::Index m = A.rows();
         balance(A, d);
         hessenberg.compute(A);
         H = hessenberg.matrixH();
         work = H;
-        hessenberg_eigenvalues(work.data(), m, values);
+        hessenberg_eigenvalues(work.data(), m, values, guess);
         if (shapes == nullptr && !solvable) return;
         Q = hessenberg.matrixQ();
         tiny = std::numeric_limits<double>::epsilon() * std::max(H.cwiseAbs().maxCoeff(), 1e-300);
@@ -354,7 +370,8 @@ void loop_modes(const double* stack, Eigen::Index count, Eigen::Index m, const R
         return [&, modes = Modes(m)](Eigen::Index begin, Eigen::Index end) mutable {
             for (Eigen::Index s = begin; s < end; ++s) {
                 modes.A = Eigen::Map<const RowMatrixXd>(stack + s * m * m, m, m);
-                modes.compute(&R, values + s * m, shapes + s * R.rows() * m);
+                modes.compute(&R, values + s * m, shapes + s * R.rows() * m, false,
+                              s > begin ? values + (s - 1) * m : nullptr);
             }
         };
     });
@@ -430,7 +447,8 @@ void speed_loops(const SpeedLoops& in, const double* values_p, Eigen::Index coun
                 M.topRows(n).noalias() += X * in.P;
                 if (loops != nullptr) Eigen::Map<RowMatrixXd>(loops + s * m * m, m, m) = M;
                 modes.A = M;
-                modes.compute(&in.R, values + s * m, shaped ? shapes + s * r * m : nullptr, driven);
+                modes.compute(&in.R, values + s * m, shaped ? shapes + s * r * m : nullptr, driven,
+                              s > begin ? values + (s - 1) * m : nullptr);
                 if (driven) modes.solve(std::polar(1.0, p * T), x.data(), states + s * m);
             }
         };
