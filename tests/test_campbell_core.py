@@ -67,6 +67,29 @@ def test_speed_loops_shapes_are_loop_modes() -> None:
     np.testing.assert_array_equal(shapes, expected_shapes)
 
 
+def test_warm_started_poles_are_each_speeds_own_and_do_not_depend_on_the_threads() -> None:
+    """Each speed's QR starts from the previous speed's poles (within a block of speeds): the poles and the
+    bearing shapes' size (of the oscillating poles) are those of the speed alone (cold) to rounding, and the
+    same digits on one thread or two (the blocks, not the threads, fix which speed warms which)."""
+    rig, pid = af.RotorRig.example(), af.RotorRig.example_controller()
+    parts = _campbell._loop_parts(rig, _control.controller_matrix(pid, 4))
+    R, _ = _campbell._bearing_form(rig, parts[-1].shape[0])
+    speeds = np.linspace(0.0, 6000.0, 41)
+    one = _core.speed_loops(*parts, speeds, R=R, workers=1)
+    two = _core.speed_loops(*parts, speeds, R=R, workers=2)
+    np.testing.assert_array_equal(one[0], two[0])
+    np.testing.assert_array_equal(one[1], two[1])
+    for speed, values, shapes in zip(speeds, one[0], one[1]):
+        cold_values, cold_shapes, _, _ = _core.speed_loops(*parts, np.array([speed]), R=R, workers=1)
+        assert matched(values, cold_values[0]) < 1e-12
+        size, cold_size = np.linalg.norm(shapes, axis=0), np.linalg.norm(cold_shapes[0], axis=0)
+        for pole, s in zip(values, size):  # a repeated pole's copies: the same sizes as a set
+            if abs(np.angle(pole)) <= 1e-9:  # on the real axis to rounding: no whirl, and its shape may be none
+                continue
+            near = np.abs(cold_values[0] - pole) < 1e-9
+            assert np.min(np.abs(cold_size[near] - s)) < 1e-9 * max(size.max(), 1e-300)
+
+
 def test_speed_loops_refuse_mismatched_shapes_and_holds() -> None:
     A0, A1, B, holds, P, L = random_parts(np.random.default_rng(6))
     with pytest.raises(ValueError, match="A0, A1, B"):

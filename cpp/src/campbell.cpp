@@ -21,14 +21,18 @@ namespace {
 
 // The eigenvalues of the upper Hessenberg matrix a (n x n, row-major, overwritten) by Francis double-shift QR
 // steps on the active window only (EISPACK's hqr): no Schur form, no vectors. A complex pair comes as
-// (x + j z, x - j z), z > 0.
-void hessenberg_eigenvalues(double* a, Eigen::Index n, cd* values) {
+// (x + j z, x - j z), z > 0. `guess` (n, or null): a nearby matrix's eigenvalues as this function gave them
+// (the previous speed's): the first step at each bottom row nn takes guess[nn] and its neighbour as its shifts
+// instead of the trailing 2 x 2's, so a pole that barely moved deflates in about one step. A poor guess
+// costs one step per row; the standard shifts follow, so convergence is as without.
+void hessenberg_eigenvalues(double* a, Eigen::Index n, cd* values, const cd* guess = nullptr) {
     const auto at = [&](Eigen::Index i, Eigen::Index j) -> double& { return a[i * n + j]; };
     const auto sign = [](double x, double y) { return y >= 0.0 ? std::abs(x) : -std::abs(x); };
     const double eps = std::numeric_limits<double>::epsilon();
     double norm = 0.0;
     for (Eigen::Index i = 0; i < n; ++i)
         for (Eigen::Index j = std::max<Eigen::Index>(i - 1, 0); j < n; ++j) norm += std::abs(at(i, j));
+    Eigen::Index warmed = n;  // the last bottom row given the guess's shifts
     Eigen::Index nn = n - 1, l = 0;
     double t = 0.0;  // the exceptional shifts' sum
     while (nn >= 0) {
@@ -70,6 +74,17 @@ void hessenberg_eigenvalues(double* a, Eigen::Index n, cd* values) {
                 const double s = std::abs(at(nn, nn - 1)) + std::abs(at(nn - 1, nn - 2));
                 y = x = 0.75 * s;
                 w = -0.4375 * s * s;
+            } else if (guess != nullptr && warmed != nn) {  // the guess's shifts, once per bottom row
+                warmed = nn;
+                const cd g = guess[nn], h = guess[nn - 1];
+                if (g.imag() != 0.0) {  // a complex pair: x = y = Re g, x y - w = |g|^2
+                    y = x = g.real() - t;
+                    w = -g.imag() * g.imag();
+                } else {  // two real shifts: g and its neighbour if real, else g twice
+                    x = g.real() - t;
+                    y = (h.imag() == 0.0 ? h.real() : g.real()) - t;
+                    w = 0.0;
+                }
             }
             ++its;
             Eigen::Index m = nn - 2;
@@ -148,70 +163,94 @@ struct InverseIteration {
     std::vector<double> ur, ui, lr, li, swapped, yr, yi;
 };
 
-// y with H y = lambda y, |y| = 1, by two steps of inverse iteration from the start vector y (H upper
-// Hessenberg, row-major; LU of H - lambda I pivoting between neighbouring rows; a zero pivot made tiny, as
-// LAPACK's hsein); with `solve`, y becomes (H - lambda I)^-1 y (one step, not normalised). Elementwise loops over real
-// arrays (vectorised where the processor can; no reduction is reordered, so the same digits either way).
+// y with H y = lambda y by one step of inverse iteration from the start vector y (H upper Hessenberg,
+// row-major; LU of H - lambda I pivoting between neighbouring rows; a zero pivot made tiny, as LAPACK's hsein):
+// y becomes (H - lambda I)^-1 y, not normalised. One step suffices for an eigenvalue from QR (accurate to
+// rounding: the other vectors' parts shrink by eps |H| / gap), as in LAPACK's hsein; the solves of the steady
+// states are the same step. `Complex` false: lambda and y real (lambda_i, y's imaginary part ignored), the same
+// operations without their zero imaginary parts. Elementwise loops over real arrays (vectorised where the
+// processor can; no reduction is reordered, so the same digits either way).
+template <bool Complex>
 AMB_FAST_ALWAYS_INLINE void inverse_iteration_kernel(const double* H, Eigen::Index n, double lambda_r, double lambda_i,
-                                                     double tiny, InverseIteration& w, bool solve) {
+                                                     double tiny, InverseIteration& w) {
     double *ur = w.ur.data(), *ui = w.ui.data(), *yr = w.yr.data(), *yi = w.yi.data();
     for (Eigen::Index i = 0; i < n; ++i) {
-        for (Eigen::Index j = std::max<Eigen::Index>(i - 1, 0); j < n; ++j)
-            ur[i * n + j] = H[i * n + j], ui[i * n + j] = 0.0;
+        for (Eigen::Index j = std::max<Eigen::Index>(i - 1, 0); j < n; ++j) {
+            ur[i * n + j] = H[i * n + j];
+            if (Complex) ui[i * n + j] = 0.0;
+        }
         ur[i * n + i] -= lambda_r;
-        ui[i * n + i] = -lambda_i;
+        if (Complex) ui[i * n + i] = -lambda_i;
     }
     for (Eigen::Index j = 0; j + 1 < n; ++j) {
         double *ar = ur + j * n, *ai = ui + j * n, *br = ur + (j + 1) * n, *bi = ui + (j + 1) * n;
-        const bool swap = br[j] * br[j] + bi[j] * bi[j] > ar[j] * ar[j] + ai[j] * ai[j];
+        const bool swap =
+            Complex ? br[j] * br[j] + bi[j] * bi[j] > ar[j] * ar[j] + ai[j] * ai[j] : br[j] * br[j] > ar[j] * ar[j];
         w.swapped[static_cast<std::size_t>(j)] = swap;
         if (swap)
-            for (Eigen::Index c = j; c < n; ++c) std::swap(ar[c], br[c]), std::swap(ai[c], bi[c]);
-        if (ar[j] == 0.0 && ai[j] == 0.0) ar[j] = tiny;
-        const double norm = ar[j] * ar[j] + ai[j] * ai[j];
-        const double mr = (br[j] * ar[j] + bi[j] * ai[j]) / norm, mi = (bi[j] * ar[j] - br[j] * ai[j]) / norm;
-        w.lr[static_cast<std::size_t>(j)] = mr, w.li[static_cast<std::size_t>(j)] = mi;
-        for (Eigen::Index c = j + 1; c < n; ++c) {
-            const double xr = ar[c], xi = ai[c];
-            br[c] -= mr * xr - mi * xi;
-            bi[c] -= mr * xi + mi * xr;
-        }
-    }
-    if (ur[n * n - 1] == 0.0 && ui[n * n - 1] == 0.0) ur[n * n - 1] = tiny;
-    for (int step = 0; step < (solve ? 1 : 2); ++step) {
-        for (Eigen::Index j = 0; j + 1 < n; ++j) {
-            const auto J = static_cast<std::size_t>(j);
-            if (w.swapped[J] != 0.0) std::swap(yr[j], yr[j + 1]), std::swap(yi[j], yi[j + 1]);
-            yr[j + 1] -= w.lr[J] * yr[j] - w.li[J] * yi[j];
-            yi[j + 1] -= w.lr[J] * yi[j] + w.li[J] * yr[j];
-        }
-        for (Eigen::Index i = n - 1; i >= 0; --i) {
-            const double *rr = ur + i * n, *ri = ui + i * n;
-            double sr = yr[i], si = yi[i];
-            for (Eigen::Index c = i + 1; c < n; ++c) {
-                sr -= rr[c] * yr[c] - ri[c] * yi[c];
-                si -= rr[c] * yi[c] + ri[c] * yr[c];
+            for (Eigen::Index c = j; c < n; ++c) {
+                std::swap(ar[c], br[c]);
+                if (Complex) std::swap(ai[c], bi[c]);
             }
-            const double norm = rr[i] * rr[i] + ri[i] * ri[i];
-            yr[i] = (sr * rr[i] + si * ri[i]) / norm;
-            yi[i] = (si * rr[i] - sr * ri[i]) / norm;
+        if (Complex ? ar[j] == 0.0 && ai[j] == 0.0 : ar[j] == 0.0) ar[j] = tiny;
+        if (Complex) {
+            const double norm = ar[j] * ar[j] + ai[j] * ai[j];
+            const double mr = (br[j] * ar[j] + bi[j] * ai[j]) / norm, mi = (bi[j] * ar[j] - br[j] * ai[j]) / norm;
+            w.lr[static_cast<std::size_t>(j)] = mr, w.li[static_cast<std::size_t>(j)] = mi;
+            for (Eigen::Index c = j + 1; c < n; ++c) {
+                const double xr = ar[c], xi = ai[c];
+                br[c] -= mr * xr - mi * xi;
+                bi[c] -= mr * xi + mi * xr;
+            }
+        } else {
+            const double mr = br[j] * ar[j] / (ar[j] * ar[j]);
+            w.lr[static_cast<std::size_t>(j)] = mr;
+            for (Eigen::Index c = j + 1; c < n; ++c) br[c] -= mr * ar[c];
         }
-        if (solve) break;
-        double norm = 0.0;
-        for (Eigen::Index i = 0; i < n; ++i) norm += yr[i] * yr[i] + yi[i] * yi[i];
-        norm = 1.0 / std::sqrt(norm);
-        for (Eigen::Index i = 0; i < n; ++i) yr[i] *= norm, yi[i] *= norm;
     }
+    if (Complex ? ur[n * n - 1] == 0.0 && ui[n * n - 1] == 0.0 : ur[n * n - 1] == 0.0) ur[n * n - 1] = tiny;
+    for (Eigen::Index j = 0; j + 1 < n; ++j) {
+        const auto J = static_cast<std::size_t>(j);
+        if (!Complex) {
+            if (w.swapped[J] != 0.0) std::swap(yr[j], yr[j + 1]);
+            yr[j + 1] -= w.lr[J] * yr[j];
+            continue;
+        }
+        if (w.swapped[J] != 0.0) std::swap(yr[j], yr[j + 1]), std::swap(yi[j], yi[j + 1]);
+        yr[j + 1] -= w.lr[J] * yr[j] - w.li[J] * yi[j];
+        yi[j + 1] -= w.lr[J] * yi[j] + w.li[J] * yr[j];
+    }
+    for (Eigen::Index i = n - 1; i >= 0; --i) {
+        const double *rr = ur + i * n, *ri = ui + i * n;
+        double sr = yr[i], si = Complex ? yi[i] : 0.0;
+        if (!Complex) {
+            for (Eigen::Index c = i + 1; c < n; ++c) sr -= rr[c] * yr[c];
+            yr[i] = sr * rr[i] / (rr[i] * rr[i]);
+            continue;
+        }
+        for (Eigen::Index c = i + 1; c < n; ++c) {
+            sr -= rr[c] * yr[c] - ri[c] * yi[c];
+            si -= rr[c] * yi[c] + ri[c] * yr[c];
+        }
+        const double norm = rr[i] * rr[i] + ri[i] * ri[i];
+        yr[i] = (sr * rr[i] + si * ri[i]) / norm;
+        yi[i] = (si * rr[i] - sr * ri[i]) / norm;
+    }
+    if (!Complex)
+        for (Eigen::Index i = 0; i < n; ++i) yi[i] = 0.0;
 }
 
-void inverse_iteration_portable(const double* H, Eigen::Index n, double lr, double li, double tiny, InverseIteration& w,
-                                bool solve) {
-    inverse_iteration_kernel(H, n, lr, li, tiny, w, solve);
+// `real`: lambda and y real (the real kernel), else the complex one.
+void inverse_iteration_portable(const double* H, Eigen::Index n, cd lambda, bool real, double tiny,
+                                InverseIteration& w) {
+    if (real) inverse_iteration_kernel<false>(H, n, lambda.real(), 0.0, tiny, w);
+    else inverse_iteration_kernel<true>(H, n, lambda.real(), lambda.imag(), tiny, w);
 }
 #if AMB_FAST_WIDE_LANES
-__attribute__((target("avx2"))) void inverse_iteration_avx2(const double* H, Eigen::Index n, double lr, double li,
-                                                            double tiny, InverseIteration& w, bool solve) {
-    inverse_iteration_kernel(H, n, lr, li, tiny, w, solve);
+__attribute__((target("avx2"))) void inverse_iteration_avx2(const double* H, Eigen::Index n, cd lambda, bool real,
+                                                            double tiny, InverseIteration& w) {
+    if (real) inverse_iteration_kernel<false>(H, n, lambda.real(), 0.0, tiny, w);
+    else inverse_iteration_kernel<true>(H, n, lambda.real(), lambda.imag(), tiny, w);
 }
 #else
 constexpr auto inverse_iteration_avx2 = inverse_iteration_portable;
@@ -221,53 +260,71 @@ constexpr auto inverse_iteration_avx2 = inverse_iteration_portable;
 class Modes {
   public:
     explicit Modes(Eigen::Index m)
-        : A(m, m), d(m), hessenberg(m), H(m, m), work(m, m), Q(m, m), iteration(m), v(static_cast<std::size_t>(m)) {}
+        : A(m, m),
+          d(m),
+          hessenberg(m),
+          H(m, m),
+          work(m, m),
+          Q(m, m),
+          start(m, m),
+          Yr(m, m),
+          Yi(m, m),
+          Vr(m, m),
+          Vi(m, m),
+          iteration(m) {
+        // a start vector of its own per index i (column i), so that a repeated eigenvalue's copies differ
+        for (Eigen::Index i = 0; i < m; ++i)
+            for (Eigen::Index j = 0; j < m; ++j)
+                start(j, i) = 1.0 + 0.5 * std::sin(static_cast<double>(static_cast<std::size_t>((i + 1) * (j + 1))));
+    }
 
     // A: the matrix (m x m, overwritten by its balanced form). shapes: R v for each eigenvalue (shape[j * m + i]),
-    // or null for the eigenvalues only; `solvable`: keep what `solve` needs.
-    void compute(const RowMatrixXd* R, cd* values, cd* shapes, bool solvable = false) {
+    // or null for the eigenvalues only; `solvable`: keep what `solve` needs; guess: the previous (nearby)
+    // matrix's values, or null (hessenberg_eigenvalues).
+    void compute(const RowMatrixXd* R, cd* values, cd* shapes, bool solvable, const cd* guess) {
         const Eigen::Index m = A.rows();
         balance(A, d);
         hessenberg.compute(A);
         H = hessenberg.matrixH();
         work = H;
-        hessenberg_eigenvalues(work.data(), m, values);
+        hessenberg_eigenvalues(work.data(), m, values, guess);
         if (shapes == nullptr && !solvable) return;
         Q = hessenberg.matrixQ();
         tiny = std::numeric_limits<double>::epsilon() * std::max(H.cwiseAbs().maxCoeff(), 1e-300);
         if (shapes == nullptr) return;
+        const auto step = simd_avx2() ? inverse_iteration_avx2 : inverse_iteration_portable;
+        // Y's column i: eigenvalue i's vector of H (zero where none is wanted or it is the conjugate's)
+        const auto wanted = [&](Eigen::Index i) {
+            const bool conjugate = values[i].imag() < 0.0 && i > 0 && values[i - 1] == std::conj(values[i]);
+            return !conjugate && !(values[i].imag() == 0.0 && values[i].real() > 0.0);
+        };
+        for (Eigen::Index i = 0; i < m; ++i) {
+            Yr.col(i).setZero();
+            Yi.col(i).setZero();
+            if (!wanted(i)) continue;
+            Eigen::Map<Eigen::VectorXd>(iteration.yr.data(), m) = start.col(i);
+            Eigen::Map<Eigen::VectorXd>(iteration.yi.data(), m).setZero();
+            step(H.data(), m, values[i], values[i].imag() == 0.0, tiny, iteration);
+            Yr.col(i) = Eigen::Map<const Eigen::VectorXd>(iteration.yr.data(), m);
+            Yi.col(i) = Eigen::Map<const Eigen::VectorXd>(iteration.yi.data(), m);
+        }
+        // v = D Q y of unit norm and R v: the products for all eigenvalues at once
+        Vr.noalias() = Q * Yr;
+        Vi.noalias() = Q * Yi;
+        Vr = d.asDiagonal() * Vr;
+        Vi = d.asDiagonal() * Vi;
+        Sr.noalias() = *R * Vr;
+        Si.noalias() = *R * Vi;
         const Eigen::Index r = R->rows();
         for (Eigen::Index i = 0; i < m; ++i) {
             cd* shape = shapes + i;  // shape[j * m]: row j
-            const bool conjugate = values[i].imag() < 0.0 && i > 0 && values[i - 1] == std::conj(values[i]);
-            if (conjugate) {  // the conjugate eigenvalue's vector is the conjugate vector
+            if (wanted(i)) {
+                const double norm = std::sqrt(Vr.col(i).squaredNorm() + Vi.col(i).squaredNorm());
+                for (Eigen::Index j = 0; j < r; ++j) shape[j * m] = cd(Sr(j, i), Si(j, i)) / norm;
+            } else if (values[i].imag() < 0.0) {  // the conjugate eigenvalue's vector is the conjugate vector
                 for (Eigen::Index j = 0; j < r; ++j) shape[j * m] = std::conj(shape[j * m - 1]);
-                continue;
-            }
-            if (values[i].imag() == 0.0 && values[i].real() > 0.0) {
+            } else {
                 for (Eigen::Index j = 0; j < r; ++j) shape[j * m] = 0.0;
-                continue;
-            }
-            for (std::size_t j = 0; j < static_cast<std::size_t>(m); ++j) {  // a start vector of its own per index
-                iteration.yr[j] = 1.0 + 0.5 * std::sin(static_cast<double>(static_cast<std::size_t>(i + 1) * (j + 1)));
-                iteration.yi[j] = 0.0;
-            }
-            (simd_avx2() ? inverse_iteration_avx2 : inverse_iteration_portable)(
-                H.data(), m, values[i].real(), values[i].imag(), tiny, iteration, false);
-            double norm = 0.0;  // v = D Q y, of unit norm
-            for (Eigen::Index a = 0; a < m; ++a) {
-                cd sum = 0.0;
-                for (Eigen::Index b = 0; b < m; ++b)
-                    sum += Q(a, b) *
-                           cd(iteration.yr[static_cast<std::size_t>(b)], iteration.yi[static_cast<std::size_t>(b)]);
-                v[static_cast<std::size_t>(a)] = d[a] * sum;
-                norm += std::norm(v[static_cast<std::size_t>(a)]);
-            }
-            norm = std::sqrt(norm);
-            for (Eigen::Index j = 0; j < r; ++j) {
-                cd sum = 0.0;
-                for (Eigen::Index a = 0; a < m; ++a) sum += (*R)(j, a) * v[static_cast<std::size_t>(a)];
-                shape[j * m] = sum / norm;
             }
         }
     }
@@ -282,8 +339,7 @@ class Modes {
             iteration.yr[static_cast<std::size_t>(b)] = -sum.real();
             iteration.yi[static_cast<std::size_t>(b)] = -sum.imag();
         }
-        (simd_avx2() ? inverse_iteration_avx2 : inverse_iteration_portable)(H.data(), m, z.real(), z.imag(), tiny,
-                                                                            iteration, true);
+        (simd_avx2() ? inverse_iteration_avx2 : inverse_iteration_portable)(H.data(), m, z, false, tiny, iteration);
         for (Eigen::Index a = 0; a < m; ++a) {
             cd sum = 0.0;
             for (Eigen::Index b = 0; b < m; ++b)
@@ -300,9 +356,9 @@ class Modes {
     Eigen::VectorXd d;
     Eigen::HessenbergDecomposition<Eigen::MatrixXd> hessenberg;
     RowMatrixXd H, work;
-    Eigen::MatrixXd Q;
+    Eigen::MatrixXd Q, start;
+    Eigen::MatrixXd Yr, Yi, Vr, Vi, Sr, Si;  // the vectors of H, of A and R times them: a column per eigenvalue
     InverseIteration iteration;
-    std::vector<cd> v;
 };
 
 }  // namespace
@@ -314,7 +370,8 @@ void loop_modes(const double* stack, Eigen::Index count, Eigen::Index m, const R
         return [&, modes = Modes(m)](Eigen::Index begin, Eigen::Index end) mutable {
             for (Eigen::Index s = begin; s < end; ++s) {
                 modes.A = Eigen::Map<const RowMatrixXd>(stack + s * m * m, m, m);
-                modes.compute(&R, values + s * m, shapes + s * R.rows() * m);
+                modes.compute(&R, values + s * m, shapes + s * R.rows() * m, false,
+                              s > begin ? values + (s - 1) * m : nullptr);
             }
         };
     });
@@ -390,7 +447,8 @@ void speed_loops(const SpeedLoops& in, const double* values_p, Eigen::Index coun
                 M.topRows(n).noalias() += X * in.P;
                 if (loops != nullptr) Eigen::Map<RowMatrixXd>(loops + s * m * m, m, m) = M;
                 modes.A = M;
-                modes.compute(&in.R, values + s * m, shaped ? shapes + s * r * m : nullptr, driven);
+                modes.compute(&in.R, values + s * m, shaped ? shapes + s * r * m : nullptr, driven,
+                              s > begin ? values + (s - 1) * m : nullptr);
                 if (driven) modes.solve(std::polar(1.0, p * T), x.data(), states + s * m);
             }
         };
