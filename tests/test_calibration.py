@@ -12,8 +12,7 @@ import pytest
 from scipy import stats
 
 import amb_fast as af
-from amb_fast.calibration import Design, RigFit, design_controller, fit_rig
-from amb_fast.calibration._cli import read_estimate
+from amb_fast.calibration import Design, RigFit, design_controller, fit_rig, read_estimate
 
 SPHS = af.schroeder_multisine(f0=1.0, f_max=200.0)
 PID_A = af.PID.paper()

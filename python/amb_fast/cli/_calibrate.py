@@ -12,7 +12,7 @@ import numpy as np
 from .._experiment import Estimate
 from .._params import PID, Rig
 from .._toml import load_rig
-from ..calibration._cli import FITTABLE, PLAIN_PERIODS, read_estimate, records, same_controller
+from ..calibration import FITTABLE, PLAIN_PERIODS, read_estimate, records, same_controller
 from ..controllers import load_controller, recorded_controller
 from ._options import UsageError, _option_names, _started, check_output
 
