@@ -272,7 +272,7 @@ def read_sweep_file(path: str | Path) -> tuple[str | None, dict[str, Any], Any]:
     require(suffix in (".nc", ".npz"), "path", str(path), expected)
     if suffix == ".npz":
         f = read_npz(path)  # a damaged member fails its CRC-32 and is refused
-        header = json.loads(str(f["header"]))
+        header = json.loads(str(f["header"])) if "header" in f else {}  # a plain .npz: refused by kind below
         return header.get("kind"), header, f
     ds = read_netcdf(path)  # refuses a file whose checksums do not match
     return ds.attrs.get("amb_fast_kind"), dict(ds.attrs), ds

@@ -156,7 +156,7 @@ def estimate_from_csv(text: str, name: str) -> EstimateN:
 def load_estimate(path: Path) -> EstimateN:
     """Read an ``.npz`` estimate of N axes (a member failing its CRC-32 is refused, naming the file)."""
     f = read_npz(path)
-    header = json.loads(str(f["header"]))
+    header = json.loads(str(f["header"])) if "header" in f else {}  # a plain .npz: refused by kind below
     require(header.get("kind") == KIND, "path", str(path), f"an .npz file written by {KIND}.save")
     return _build(f["freq"], {name: f[name] for name in MATRICES + AMPLITUDES}, header["periods"], header["axes"])
 
