@@ -200,9 +200,6 @@ def median_window_value(median_window: int) -> int:
     return window
 
 
-_window = median_window_value  # the one-axis sweep's name for it
-
-
 MAX_AUTOMATIC_SETTLE = 10_000
 
 

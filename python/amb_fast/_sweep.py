@@ -16,7 +16,7 @@ from . import _core
 from ._blas import blas_on_one_thread, blas_parked
 from ._dispatch import axes_aware
 from ._excitation import Multisine
-from ._experiment import _plan, _window, automatic_settle
+from ._experiment import _plan, automatic_settle, median_window_value
 from ._linear import AnyController, _gain_arrays, core_controller, is_controller, loop_poles
 from ._linear_poles import _closed_loop_stacks, _radius_of_gains
 from ._params import PID, Rig
@@ -209,7 +209,7 @@ def sweep_options(periods: int, settle_periods: int | None, median_window: int, 
     require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
     settle = None if settle_periods is None else integer("settle_periods", settle_periods, 0)
     periods = integer("periods", periods, 2)
-    return dict(periods=periods, settle_periods=settle, median_window=_window(median_window), start=start)
+    return dict(periods=periods, settle_periods=settle, median_window=median_window_value(median_window), start=start)
 
 
 def run_points(

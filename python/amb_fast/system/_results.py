@@ -48,9 +48,6 @@ def _column(name: str, part: str = "") -> str:
     return "_".join(p for p in (name, part, unit) if p)
 
 
-_complex, _write_npz, _xarray = complex_array, write_npz, xarray_module  # the sweeps' files use them too
-
-
 def _fields(est: EstimateN) -> dict[str, np.ndarray]:
     return {name: getattr(est, name) for name in (*MATRICES, *AMPLITUDES)}
 

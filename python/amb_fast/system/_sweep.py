@@ -30,11 +30,11 @@ from .._params import PID, Rig
 from .._sweep import point_seeds, run_or_split, run_points, sweep_options
 from .._sweep_result import OVERFLOW, read_sweep_file, register_sweep_kind, sweep_grid, unit_of
 from .._validate import require, seed_value
-from ..io import RESULT_UNITS, pandas_module, write_netcdf
+from ..io import RESULT_UNITS, complex_array, pandas_module, write_netcdf, write_npz, xarray_module
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
 from ._experiment import coefficients, core_args, experiment_forces, experiment_seeds, run_experiment, settle_for
 from ._model import System, loop_models
-from ._results import _ROTOR_UNITS, _complex, _long, _write_npz, _xarray
+from ._results import _ROTOR_UNITS, _long
 
 _AXIS_FIELDS = tuple(f.name for f in fields(Rig) if f.name not in ("force_law", "substeps", "mass"))
 _GAINS = ("kp", "ki", "kd", "derivative_cutoff")
@@ -107,7 +107,7 @@ class SweepResultN(ArrayRecord):
         coords |= {"freq": (("freq",), self.freq, {"units": "Hz"}), "out": (("out",), names, {}),
                    "in": (("in",), names, {})}  # fmt: skip
         attrs = {"amb_fast_kind": _KIND, "params": json.dumps(list(self.params)), "axes": json.dumps(self.axes)}
-        return _xarray().Dataset(data, coords=coords, attrs=attrs)
+        return xarray_module().Dataset(data, coords=coords, attrs=attrs)
 
     def to_dataframe(self):  # noqa: ANN201 - pandas is optional
         """One row per point, line and matrix entry: the swept paths, ``status``, then as
@@ -132,7 +132,7 @@ class SweepResultN(ArrayRecord):
         else:
             arrays = {f"param_{i}": values for i, values in enumerate(self.params.values())}
             arrays |= {name: getattr(self, name) for name in ("freq", "stable", "seeds", *_ESTIMATES)}
-            _write_npz(path, {"kind": _KIND, "params": list(self.params), "axes": list(self.axes)}, arrays)
+            write_npz(path, {"kind": _KIND, "params": list(self.params), "axes": list(self.axes)}, arrays)
         return path
 
     @staticmethod
@@ -152,7 +152,7 @@ def _from_file(header: dict[str, Any], contents: Any) -> SweepResultN:  # noqa: 
     params = {name: get(f"param_{i}" if npz else name) for i, name in enumerate(listed["params"])}
     arrays = {name: get(name) for name in ("freq", "stable", "seeds", *_ESTIMATES[: None if npz else -1])}
     if not npz:
-        arrays["receptance"] = _complex(get("receptance_real"), get("receptance_imag"))
+        arrays["receptance"] = complex_array(get("receptance_real"), get("receptance_imag"))
     arrays["stable"], arrays["seeds"] = arrays["stable"].astype(bool), arrays["seeds"].astype(np.uint64)
     return SweepResultN(params=params, axes=tuple(str(a) for a in listed["axes"]), **arrays)
 
