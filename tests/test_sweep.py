@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import amb_fast as af
+from amb_fast._sweep_result import unit_of
 
 FIELDS = ("H", "k", "c", "k_std", "c_std", "k_smooth", "c_smooth", "unexcited_displacement")
 
@@ -168,6 +169,16 @@ def test_to_xarray_dims_and_coordinates(setup) -> None:
     assert ds.k.attrs["units"] == "N/m"
     # The grid point (kp=2400, kd=4) is row 3 of the flat result.
     np.testing.assert_array_equal(ds.k.sel(kp=2400.0, kd=4.0), result.k[3])
+
+
+def test_a_swept_dead_time_and_fs_carry_their_units(setup) -> None:
+    # The sweep's units are the parameters' own table: dead_time in s, fs in Hz (both were reported as "").
+    rig, pid, excitation = setup
+    result = af.sweep(rig, pid, excitation, dead_time=[0.0, 1e-4], periods=2)
+    assert "dead_time: [0, 0.0001] s" in repr(result)
+    assert (unit_of("dead_time"), unit_of("fs"), unit_of("kp")) == ("s", "Hz", "A/m")
+    pytest.importorskip("xarray")
+    assert result.to_xarray().dead_time.attrs["units"] == "s"
 
 
 def test_vectorised_prediction_matches_one_by_one(setup) -> None:

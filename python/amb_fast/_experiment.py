@@ -145,6 +145,14 @@ class Estimate(EstimateBase):
         return to_ross(self, n, smoothed=smoothed, **kwargs)
 
 
+def actual_coefficients(H: np.ndarray, freq: np.ndarray, mass: float) -> tuple[np.ndarray, np.ndarray]:
+    """Actual stiffness k (N/m) and damping c (N s/m) from the dynamic stiffness ``H`` = F/Y (N/m) at ``freq``
+    (Hz) of a known ``mass`` (kg), paper eq. 9: ``k = m w^2 + Re H``, ``c = Im H / w`` (the core's estimator
+    computes the same)."""
+    w = 2 * np.pi * np.asarray(freq, dtype=float)
+    return mass * w**2 + H.real, H.imag / w
+
+
 def _plan(harmonics: np.ndarray, period: int, skip: np.ndarray | None = None) -> tuple[_core.LinePlan, np.ndarray]:
     """The core's plan for these excited harmonics, and the unexcited ones below the highest (read-only;
     made once per distinct excitation). ``skip``: harmonics the force excites beyond the chosen ones, which

@@ -14,16 +14,11 @@ from numpy.typing import ArrayLike
 
 from ._equality import UNITS as FIELD_UNITS
 from ._equality import ArrayRecord
+from ._params import UNITS
 from ._validate import require
 
 SWEPT = ("kp", "ki", "kd")  # the PID gains: swept together in closed form
 STATUS = ("ok", "unstable", "touchdown", "saturated")  # index = the core's PointStatus
-UNITS = {
-    "kp": "A/m", "ki": "A/(m s)", "kd": "A s/m", "derivative_cutoff": "Hz", "mass": "kg", "kyy": "N/m",
-    "kiy": "N/A", "bias_current": "A", "amp_bandwidth": "Hz", "eddy_bandwidth": "Hz", "sensor_bandwidth": "Hz",
-    "sensor_noise": "m rms", "force_noise": "N rms", "mass_loading": "kg", "force_coupling_tau": "s",
-    "clearance": "m", "current_limit": "A",
-}  # fmt: skip
 
 
 def unit_of(name: str) -> str:
@@ -149,12 +144,10 @@ class SweepResult(ArrayRecord):
 
     def to_xarray(self):  # noqa: ANN201 - xarray is optional
         """An ``xarray.Dataset`` with one dimension per swept parameter (product grids) or ``point``, and ``freq``."""
-        try:
-            import xarray as xr
-        except ImportError as error:
-            raise ImportError("to_xarray needs xarray: pip install 'amb_fast[xarray]'") from error
+        from .io import xarray_module
+
         data, coords, attrs = self._dataset_parts()
-        return xr.Dataset(data, coords=coords, attrs=attrs)
+        return xarray_module().Dataset(data, coords=coords, attrs=attrs)
 
     def _dataset_parts(self) -> tuple[dict[str, tuple], dict[str, tuple], dict[str, Any]]:
         """The dataset's data variables and coordinates as ``name: (dims, values, attrs)``, and its

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import importlib
 import json
 import zipfile
 import zlib
@@ -149,20 +150,22 @@ def sweep_to_dataframe(result: Any):  # noqa: ANN201, ANN401
     return pd.DataFrame(columns)
 
 
+def optional_module(name: str, needs: str, extra: str) -> Any:  # noqa: ANN401 - a module
+    """Import an optional dependency, or raise ImportError saying what ``needs`` it and the amb_fast ``extra``
+    that installs it."""
+    try:
+        return importlib.import_module(name)
+    except ImportError as error:
+        raise ImportError(f"{needs}: pip install 'amb_fast[{extra}]'") from error
+
+
 def pandas_module():  # noqa: ANN202
-    try:
-        import pandas as pd
-    except ImportError as error:
-        raise ImportError("to_dataframe needs pandas: pip install 'amb_fast[dataframe]'") from error
-    return pd
+    return optional_module("pandas", "to_dataframe needs pandas", "dataframe")
 
 
-def xarray_module():  # noqa: ANN202
-    try:
-        import xarray as xr
-    except ImportError as error:
-        raise ImportError("to_xarray needs xarray: pip install 'amb_fast[xarray]'") from error
-    return xr
+def xarray_module(needs: str = "to_xarray needs xarray"):  # noqa: ANN202
+    """xarray, or an ImportError that says what ``needs`` it and how to install it."""
+    return optional_module("xarray", needs, "xarray")
 
 
 def _weak(estimate: Estimate) -> np.ndarray:

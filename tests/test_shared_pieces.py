@@ -1,0 +1,28 @@
+"""Pieces that several parts of the package share instead of repeating: paper eq. 9 (``actual_coefficients``)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import amb_fast as af
+from amb_fast._experiment import actual_coefficients
+from amb_fast.calibration import read_estimate
+
+
+def test_eq9_is_the_estimators_and_the_plain_table_readers(tmp_path) -> None:
+    rig = af.Rig.paper()
+    estimate = af.run_experiment(rig, af.PID.paper(), af.schroeder_multisine(f_max=50.0), periods=3, seed=1)
+    k, c = actual_coefficients(estimate.H, estimate.freq, rig.mass)
+    # The core computes eq. 9 itself: the same numbers to rounding.
+    np.testing.assert_allclose(k, estimate.k, rtol=1e-14)
+    np.testing.assert_allclose(c, estimate.c, rtol=1e-14)
+    # A plain CSV table (no checksum line) has no k, c: read_estimate makes them with eq. 9, bit for bit.
+    plain = tmp_path / "plain.csv"
+    columns = np.c_[estimate.freq, estimate.H.real, estimate.H.imag, estimate.k_std, estimate.c_std]
+    np.savetxt(plain, columns, delimiter=",", comments="", fmt="%.17g",
+               header="freq_Hz,H_real_N_per_m,H_imag_N_per_m,k_std_N_per_m,c_std_Ns_per_m")  # fmt: skip
+    back = read_estimate(plain, blocks=3, mass=rig.mass)
+    np.testing.assert_array_equal(back.H, estimate.H)
+    np.testing.assert_array_equal(back.k, k)
+    np.testing.assert_array_equal(back.c, c)
+    np.testing.assert_array_equal(back.k_smooth, k)
