@@ -382,12 +382,8 @@ def identify(
             ">= 2 (standard errors need at least two)")  # fmt: skip
     clearance = optional_positive("clearance", clearance, "m")
     harmonics = excited_lines(force[start:], period, f0, fs, f_max, lines, offset=start)
-    # A few periods' force spectra: the harmonics it excites beyond the chosen lines (lines= or f_max=), which
-    # are neither estimated nor noise, and whether it repeats with the period at all (a wrong fs or f0).
-    spectra = _checks.period_spectra(force[start:], period)
-    chosen = lines is not None or f_max is not None
-    others = np.setdiff1d(_checks.excited_harmonics(spectra), harmonics) if chosen else None
-    plan, unexcited = _plan(harmonics, period, skip=others)
+    drive = drive_spectra(force[start:], period, harmonics, chosen=lines is not None or f_max is not None)
+    plan, unexcited = _plan(harmonics, period, skip=drive[1])
     try:
         raw = _core.identify(force, displacement, settle_periods, plan, mass, fs, window)
     except ValueError:
@@ -399,25 +395,11 @@ def identify(
             raise _checks.NoExcitationError(f"force has no excitation at the chosen lines: it is zero or constant "
                                             f"there ({force[start]:g} N)") from None  # fmt: skip
         raise
-    excited = harmonics if others is None else np.union1d(harmonics, others)
-    fraction = _checks.non_periodic_fraction(spectra, excited)
-    force_noise = _checks.noise_levels(force[start:], period, harmonics, raw.unexcited_force, skip=others)
-    try:
-        _checks.require_excitation(raw.force, force_noise, offset=max(abs(force[start]), abs(force[-1])))
-    except _checks.NoExcitationError as error:
-        if fraction > _checks.NON_PERIODIC:  # the likelier cause: say it in the error
-            message = _checks.non_periodic_message(fraction, fs, f0, period, spectra.shape[0])
-            raise _checks.NoExcitationError(f"{error}; also, {message}") from None
-        raise
-    if fraction > _checks.NON_PERIODIC:
-        message = _checks.non_periodic_message(fraction, fs, f0, period, spectra.shape[0])
-        warnings.warn(NonPeriodicExcitationWarning(message, fraction), stacklevel=3)
-    else:  # periodic, perhaps with a whole fraction of the period (fs too large by that factor)
-        _checks.warn_short_period(_checks.excited_harmonics(spectra), fs, f0, period)
-    displacement_noise = _checks.noise_levels(
-        displacement[start:], period, harmonics, raw.unexcited_displacement, skip=others
-    )
-    weak = _checks.weak_lines(raw.force, raw.displacement, force_noise, displacement_noise)
+    levels = (raw.force, raw.displacement, raw.unexcited_force, raw.unexcited_displacement)
+    weak, force_noise, displacement_noise = check_channels(
+        force[start:], displacement[start:], period, harmonics, drive, fs, f0, levels=levels,
+        excited_from=max(abs(force[start]), abs(force[-1])),
+    )  # fmt: skip
     _checks.warn_mostly_weak(weak, _checks.floor(force_noise), _checks.floor(displacement_noise))
     _checks.warn_transient(displacement[start:], period)
     inertia = mass * (2 * np.pi * harmonics * fs / period) ** 2
@@ -426,6 +408,61 @@ def identify(
     meta = {"source": "identify", "rig": None, "controller": None, "seed": None, "fs": fs, "f0": f0, "mass": mass,
             "settle_periods": settle_periods}  # fmt: skip
     return _estimate(raw, harmonics, unexcited, f0, meta=meta, weak=weak)
+
+
+def drive_spectra(
+    force: np.ndarray, period: int, harmonics: np.ndarray, chosen: bool
+) -> tuple[np.ndarray, np.ndarray | None, float]:
+    """What :func:`check_channels` reads of the force (or the current driving the loop), after settling: a few
+    periods' spectra; the harmonics it excites beyond the lines when ``lines=`` or ``f_max=`` ``chosen`` them
+    (neither estimated nor taken for noise; else None); the share of its power that does not repeat at the
+    excited harmonics (a wrong fs or f0)."""
+    spectra = _checks.period_spectra(force, period)
+    others = np.setdiff1d(_checks.excited_harmonics(spectra), harmonics) if chosen else None
+    excited = harmonics if others is None else np.union1d(harmonics, others)
+    return spectra, others, _checks.non_periodic_fraction(spectra, excited)
+
+
+def check_channels(
+    force: np.ndarray, displacement: np.ndarray, period: int, harmonics: np.ndarray,
+    drive: tuple[np.ndarray, np.ndarray | None, float], fs: float, f0: float, *,
+    levels: tuple[np.ndarray, ...] | None = None, excited_from: float | None = None, what: str = "force",
+    stacklevel: int = 4,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """:func:`identify`'s checks of one recorded force (``what``: or current) and displacement after settling
+    (:func:`amb_fast.system.identify` runs them on every experiment's every axis).
+
+    With ``excited_from`` (a sample of the force, N) refuses (:class:`NoExcitationError`) a force not clearly
+    above its noise at the lines, naming a non-periodic force as the likelier cause. Warns
+    (:class:`NonPeriodicExcitationWarning`) when the force does not repeat with the period, else
+    (:class:`ShortPeriodWarning`) when it repeats with a whole fraction of it. Returns the weak lines and each
+    channel's noise levels (:func:`_checks.noise_levels`). ``drive``: :func:`drive_spectra` of the force;
+    ``levels``: its and the displacement's amplitudes at the lines and levels at the unexcited harmonics as
+    the estimator measured them (else measured here on the period averages). ``stacklevel``: the warnings'.
+    """
+    spectra, others, fraction = drive
+    if levels is None:
+        excited = harmonics if others is None else np.union1d(harmonics, others)
+        gaps = np.setdiff1d(np.arange(1, harmonics.max()), excited)  # the unexcited harmonics below the top
+        averages = [np.fft.rfft(x.reshape(-1, period).mean(axis=0)) * (2.0 / period) for x in (force, displacement)]
+        levels = (*(a[harmonics] for a in averages), *(np.abs(a[gaps]) for a in averages))
+    force_lines, displacement_lines, unexcited_force, unexcited_displacement = levels
+    force_noise = _checks.noise_levels(force, period, harmonics, unexcited_force, skip=others)
+    message = _checks.non_periodic_message(fraction, fs, f0, period, spectra.shape[0], what=what)
+    if excited_from is not None:
+        try:
+            _checks.require_excitation(force_lines, force_noise, offset=excited_from)
+        except _checks.NoExcitationError as error:
+            if fraction > _checks.NON_PERIODIC:  # the likelier cause: say it in the error
+                raise _checks.NoExcitationError(f"{error}; also, {message}") from None
+            raise
+    if fraction > _checks.NON_PERIODIC:
+        warnings.warn(NonPeriodicExcitationWarning(message, fraction), stacklevel=stacklevel)
+    else:  # periodic, perhaps with a whole fraction of the period (fs too large by that factor)
+        _checks.warn_short_period(_checks.excited_harmonics(spectra), fs, f0, period, stacklevel + 1, what=what)
+    displacement_noise = _checks.noise_levels(displacement, period, harmonics, unexcited_displacement, skip=others)
+    weak = _checks.weak_lines(force_lines, displacement_lines, force_noise, displacement_noise)
+    return weak, force_noise, displacement_noise
 
 
 def excited_lines(
