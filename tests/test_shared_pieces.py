@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
+import pytest
 
 import amb_fast as af
 from amb_fast._experiment import actual_coefficients
@@ -26,3 +29,27 @@ def test_eq9_is_the_estimators_and_the_plain_table_readers(tmp_path) -> None:
     np.testing.assert_array_equal(back.k, k)
     np.testing.assert_array_equal(back.c, c)
     np.testing.assert_array_equal(back.k_smooth, k)
+
+
+@pytest.mark.parametrize(
+    ("option", "message"),
+    [
+        ({"periods": 1}, "periods must be a whole number >= 2, got 1"),
+        ({"settle_periods": -1}, "settle_periods must be a whole number >= 0, got -1"),
+        ({"median_window": 4}, "median_window must be odd, got 4"),
+        ({"start": "settled"}, "start must be 'steady' or 'rest', got 'settled'"),
+    ],
+)
+def test_one_check_of_the_run_options_for_experiments_and_sweeps(option, message) -> None:
+    ms = af.schroeder_multisine(f_max=20.0)
+    one, two, pid = af.Rig.paper(), af.TwoAxisRig.paper(), af.PID.paper()
+    calls = {
+        "run_experiment": lambda: af.run_experiment(one, pid, ms, **option),
+        "run_experiment of N axes": lambda: af.run_experiment(two, pid, ms, **option),
+        "sweep": lambda: af.sweep(one, pid, ms, kd=[3.0], progress=False, **option),
+        "sweep of N axes": lambda: af.two_axis.sweep(two, pid, ms, kxy=[0.0], **option),
+    }
+    for name, call in calls.items():
+        with pytest.raises(ValueError, match=re.escape(message)):
+            call()
+            pytest.fail(name)

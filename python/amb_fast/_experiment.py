@@ -208,6 +208,16 @@ def median_window_value(median_window: int) -> int:
     return window
 
 
+def run_options(periods: int, settle_periods: int | None, median_window: int, start: str) -> dict[str, Any]:
+    """The run options of :func:`run_experiment` (one axis or N) and of every point of a sweep, checked:
+    at least two ``periods``, ``settle_periods`` None (automatic) or >= 0, an odd ``median_window``, ``start``
+    'steady' or 'rest'."""
+    require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
+    settle = None if settle_periods is None else integer("settle_periods", settle_periods, 0)
+    periods = integer("periods", periods, 2)
+    return dict(periods=periods, settle_periods=settle, median_window=median_window_value(median_window), start=start)
+
+
 MAX_AUTOMATIC_SETTLE = 10_000
 
 
@@ -280,14 +290,12 @@ def run_experiment(
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
     pid = controller
     require(excitation.fs == pid.fs, "excitation.fs", excitation.fs, f"equal to the controller's fs ({pid.fs} Hz)")
-    periods = integer("periods", periods, 2)
-    window = median_window_value(median_window)
+    options = run_options(periods, settle_periods, median_window, start)
+    periods, settle_periods, window = options["periods"], options["settle_periods"], options["median_window"]
     period = excitation.period_samples
-    require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
     poles = require_stable(rig, pid)
     if settle_periods is None:  # the same rule as amb_fast.sweep, so a sweep point reruns bit for bit
         settle_periods = automatic_settle(rig, pid, float(np.max(np.abs(poles), initial=0.0)), period, start)
-    settle_periods = integer("settle_periods", settle_periods, 0)
     harmonics = excitation.harmonics
     plan, unexcited = _plan(harmonics, period)
     seed = seed_value(seed)

@@ -25,9 +25,10 @@ from .. import _core
 from .._equality import ArrayRecord
 from .._errors import UnstableLoopError
 from .._excitation import Multisine
+from .._experiment import run_options
 from .._linear import checked_poles, eigenvalues
 from .._params import PID, Rig
-from .._sweep import point_seeds, run_or_split, run_points, sweep_options
+from .._sweep import point_seeds, run_or_split, run_points
 from .._sweep_result import OVERFLOW, read_sweep_file, register_sweep_kind, sweep_grid, unit_of
 from .._validate import require, seed_value
 from ..io import RESULT_UNITS, complex_array, pandas_module, write_netcdf, write_npz, xarray_module
@@ -250,7 +251,7 @@ def sweep(
     """
     require(callable(getattr(rig, "mechanics", None)), "rig", type(rig).__name__, "a rig of N axes (TwoAxisRig, ...)")
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
-    options = sweep_options(periods, settle_periods, median_window, start)
+    options = run_options(periods, settle_periods, median_window, start)
     _, points = sweep_grid(dict(axes), grid)
     seeds = point_seeds(seed_value(seed), next(iter(points.values())).size)
     names = rig.mechanics().names
