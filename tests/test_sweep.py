@@ -141,6 +141,22 @@ def test_touchdown_is_flagged_and_the_rest_is_intact() -> None:
 
 
 @pytest.mark.parametrize("suffix", [".npz", ".nc"])
+def test_a_loaded_sweep_keeps_every_bit_of_H(setup, tmp_path, suffix) -> None:
+    # The .nc file holds H as H_real and H_imag: joined back as written (``real + 1j * imag`` made -0.0 into
+    # 0.0 and an infinite imaginary part into a NaN real one).
+    rig, pid, excitation = setup
+    result = af.sweep(rig, pid, excitation, kd=[4.0, 5.0], periods=2)
+    H = result.H.copy()
+    H[0, 0], H[0, 1], H[1, 2] = complex(1.5, -0.0), complex(-2.0, np.inf), complex(-0.0, 3.0)
+    path = tmp_path / f"sweep{suffix}"
+    replace(result, H=H).save(path)
+    back = af.load_sweep(path).H
+    for part in ("real", "imag"):
+        np.testing.assert_array_equal(getattr(back, part), getattr(H, part))
+        np.testing.assert_array_equal(np.signbit(getattr(back, part)), np.signbit(getattr(H, part)))
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".nc"])
 def test_save_load_round_trip_and_xarray(setup, tmp_path, suffix) -> None:
     if suffix == ".nc":
         pytest.importorskip("xarray")

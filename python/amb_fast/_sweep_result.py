@@ -228,10 +228,10 @@ def save_netcdf_with_xarray(result: SweepResult, path: Path) -> None:
     """The sweep's ``.nc`` file as xarray writes :meth:`SweepResult.to_xarray`'s Dataset: for grids the
     direct writer (``io._netcdf.write_sweep_netcdf``) does not lay out, and its reference in the tests."""
     from .io import write_netcdf
+    from .io._netcdf import split_complex
 
-    ds = result.to_xarray()
-    ds["H_real"], ds["H_imag"] = ds.H.real, ds.H.imag
-    write_netcdf(ds.drop_vars("H").assign(status=ds.status.astype(str)), path)
+    ds = split_complex(result.to_xarray())
+    write_netcdf(ds.assign(status=ds.status.astype(str)), path)
 
 
 _ARRAYS = ("freq", "H", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std", "status", "settle_periods", "seeds",
@@ -303,6 +303,8 @@ def load_sweep(path: str | Path) -> Any:  # noqa: ANN401 - a SweepResult or a Sw
     >>> bool(np.array_equal(back.k, result.k)), back.points["kd"]
     (True, array([2., 3.]))
     """
+    from .io import complex_array
+
     kind, header, contents = read_sweep_file(path)
     if kind in _READERS:
         return _READERS[kind](header, contents)
@@ -328,7 +330,7 @@ def load_sweep(path: str | Path) -> Any:  # noqa: ANN401 - a SweepResult or a Sw
         axes=axes,
         grid=grid,
         freq=np.asarray(ds.freq.values),
-        H=rows("H_real") + 1j * rows("H_imag"),
+        H=complex_array(rows("H_real"), rows("H_imag")),
         unexcited_freq=np.asarray(ds.unexcited_freq.values),
         periods=int(header["periods"]),
         blocks=int(header["blocks"]),

@@ -196,12 +196,18 @@ def write_estimate_netcdf(estimate: Estimate, path: str | Path) -> Path:
 def save_estimate_with_xarray(estimate: Estimate, path: str | Path) -> Path:
     """The estimate's ``.nc`` file as xarray writes :meth:`Estimate.to_xarray`'s Dataset, its complex variables
     split: the reference of :func:`write_estimate_netcdf` in the tests."""
-    ds = estimate_to_xarray(estimate)
+    return write_netcdf(split_complex(estimate_to_xarray(estimate)), path)
+
+
+def split_complex(ds):  # noqa: ANN001, ANN201 - an xarray Dataset
+    """``ds`` with each complex data variable ``name`` as ``name_real`` and ``name_imag`` (after the others, with
+    the attributes of ``name``): how amb_fast's ``.nc`` files hold complex numbers (``complex_variable`` joins
+    them back)."""
     for name in [n for n in ds.data_vars if np.iscomplexobj(ds[n])]:
         ds[f"{name}_real"], ds[f"{name}_imag"] = ds[name].real, ds[name].imag
         ds[f"{name}_real"].attrs = ds[f"{name}_imag"].attrs = dict(ds[name].attrs)
         ds = ds.drop_vars(name)
-    return write_netcdf(ds, path)
+    return ds
 
 
 def write_sweep_netcdf(result: SweepResult, path: str | Path) -> Path:

@@ -236,6 +236,12 @@ def complex_array(real: np.ndarray, imag: np.ndarray) -> np.ndarray:
     return out
 
 
+def complex_variable(ds: Any, name: str) -> np.ndarray:  # noqa: ANN401 - an xarray Dataset
+    """The complex variable ``name`` of a Dataset read from a ``.nc`` file, from its ``name_real`` and ``name_imag``
+    (``_netcdf.split_complex``), bit for bit."""
+    return complex_array(np.asarray(ds[f"{name}_real"].values), np.asarray(ds[f"{name}_imag"].values))
+
+
 def load_estimate(path: str | Path) -> Estimate | EstimateN:
     """Read an estimate written by :meth:`Estimate.save` (``.csv`` or ``.nc``) or :meth:`EstimateN.save`
     (``.csv``, ``.nc`` or ``.npz``: an :class:`EstimateN`); a damaged file is refused, naming it."""
@@ -287,8 +293,7 @@ def estimate_fields_from_csv(text: str) -> dict[str, Any]:
 def estimate_fields_from_dataset(ds: Any) -> dict[str, Any]:  # noqa: ANN401 - an xarray Dataset
     """:class:`Estimate`'s fields (``unexcited``: its three arrays) from its ``.nc`` file's Dataset."""
     arrays = {n: np.asarray(ds[n].values) for n in (*_REAL, "freq")}
-    for n in ("H", "force", "displacement"):
-        arrays[n] = complex_array(np.asarray(ds[f"{n}_real"].values), np.asarray(ds[f"{n}_imag"].values))
+    arrays |= {n: complex_variable(ds, n) for n in ("H", "force", "displacement")}
     arrays["weak"] = np.asarray(ds.weak.values).astype(bool)
     unexcited = (ds.unexcited_freq.values, ds.unexcited_force.values, ds.unexcited_displacement.values)
     return _fields(json.loads(ds.attrs["amb_fast"]), arrays, tuple(np.asarray(v) for v in unexcited))

@@ -30,6 +30,7 @@ from ..io import (
     write_npz,
     xarray_module,
 )
+from ..io._results import complex_variable
 
 if TYPE_CHECKING:
     from ._experiment import EstimateN
@@ -131,10 +132,8 @@ def _build(freq: np.ndarray, arrays: dict[str, np.ndarray], periods: int, axes: 
 
 def estimate_from_dataset(ds: Any) -> EstimateN:  # noqa: ANN401 - an xarray Dataset
     """The estimate of a Dataset read by :func:`amb_fast.io.read_netcdf` from its ``.nc`` file."""
-    arrays = {name: np.asarray(ds[name].values) for name in MATRICES + AMPLITUDES if name in ds}
-    for name in MATRICES + AMPLITUDES:
-        if name not in arrays:
-            arrays[name] = complex_array(np.asarray(ds[f"{name}_real"].values), np.asarray(ds[f"{name}_imag"].values))
+    arrays = {name: np.asarray(ds[name].values) if name in ds else complex_variable(ds, name)
+              for name in MATRICES + AMPLITUDES}  # fmt: skip
     return _build(np.asarray(ds.freq.values), arrays, ds.attrs["periods"], json.loads(ds.attrs["axes"]))
 
 

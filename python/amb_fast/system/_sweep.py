@@ -31,7 +31,9 @@ from .._params import PID, Rig
 from .._sweep import point_seeds, run_or_split, run_points
 from .._sweep_result import OVERFLOW, read_sweep_file, register_sweep_kind, sweep_grid, unit_of
 from .._validate import require, seed_value
-from ..io import RESULT_UNITS, complex_array, pandas_module, write_netcdf, write_npz, xarray_module
+from ..io import RESULT_UNITS, pandas_module, write_netcdf, write_npz, xarray_module
+from ..io._netcdf import split_complex
+from ..io._results import complex_variable
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
 from ._experiment import coefficients, core_args, experiment_forces, experiment_seeds, run_experiment, settle_for
 from ._model import System, loop_models
@@ -125,11 +127,7 @@ class SweepResultN(ArrayRecord):
         path = Path(path)
         require(path.suffix.lower() in (".nc", ".npz"), "path", str(path), "a file name ending in .nc or .npz")
         if path.suffix.lower() == ".nc":
-            ds = self.to_xarray()
-            for part in ("real", "imag"):
-                ds[f"receptance_{part}"] = getattr(ds.receptance, part)
-                ds[f"receptance_{part}"].attrs = dict(ds.receptance.attrs)
-            write_netcdf(ds.drop_vars("receptance"), path)
+            write_netcdf(split_complex(self.to_xarray()), path)
         else:
             arrays = {f"param_{i}": values for i, values in enumerate(self.params.values())}
             arrays |= {name: getattr(self, name) for name in ("freq", "stable", "seeds", *_ESTIMATES)}
@@ -153,7 +151,7 @@ def _from_file(header: dict[str, Any], contents: Any) -> SweepResultN:  # noqa: 
     params = {name: get(f"param_{i}" if npz else name) for i, name in enumerate(listed["params"])}
     arrays = {name: get(name) for name in ("freq", "stable", "seeds", *_ESTIMATES[: None if npz else -1])}
     if not npz:
-        arrays["receptance"] = complex_array(get("receptance_real"), get("receptance_imag"))
+        arrays["receptance"] = complex_variable(contents, "receptance")
     arrays["stable"], arrays["seeds"] = arrays["stable"].astype(bool), arrays["seeds"].astype(np.uint64)
     return SweepResultN(params=params, axes=tuple(str(a) for a in listed["axes"]), **arrays)
 
