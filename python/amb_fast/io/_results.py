@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._equality import UNITS as FIELD_UNITS
 from .._validate import require
 from ._atomic import atomic_path, atomic_text
 
@@ -57,8 +58,14 @@ _COLUMNS = (  # CSV column -> (Estimate field or expression, unit)
     "displacement_imag_m", "force_abs_N", "displacement_abs_m", "receptance_abs_m_per_N",
 )  # fmt: skip
 _REAL = ("k", "c", "k_smooth", "c_smooth", "k_std", "c_std")
-UNITS = {"H": "N/m", "receptance": "m/N", "k": "N/m", "c": "N s/m", "k_smooth": "N/m", "c_smooth": "N s/m",
-         "k_std": "N/m", "c_std": "N s/m", "force": "N", "displacement": "m"}  # fmt: skip
+#: The estimate's arrays over ``freq`` and their units (the records' own table), in the files' order.
+UNITS = {name: FIELD_UNITS[name] for name in ("H", "receptance", *_REAL, "force", "displacement")}
+
+
+def column(name: str, part: str = "") -> str:
+    """A CSV or DataFrame column: the field, the part of a complex one, its unit (``k_N_per_m``, ``H_real_N_per_m``)."""
+    unit = UNITS[name].replace(" s", "s").replace("/", "_per_")
+    return "_".join(p for p in (name, part, unit) if p)
 
 
 def version() -> str:
@@ -143,10 +150,8 @@ def sweep_to_dataframe(result: Any):  # noqa: ANN201, ANN401
     columns: dict[str, Any] = {name: np.repeat(values, lines) for name, values in result.points.items()}
     columns["status"] = np.repeat(result.status, lines)
     columns["freq_Hz"] = np.tile(result.freq, n)
-    for name, unit in (("k", "N_per_m"), ("c", "Ns_per_m"), ("k_smooth", "N_per_m"), ("c_smooth", "Ns_per_m"),
-                       ("k_std", "N_per_m"), ("c_std", "Ns_per_m")):  # fmt: skip
-        columns[f"{name}_{unit}"] = getattr(result, name).ravel()
-    columns["H_real_N_per_m"], columns["H_imag_N_per_m"] = result.H.real.ravel(), result.H.imag.ravel()
+    columns |= {column(name): getattr(result, name).ravel() for name in _REAL}
+    columns[column("H", "real")], columns[column("H", "imag")] = result.H.real.ravel(), result.H.imag.ravel()
     return pd.DataFrame(columns)
 
 

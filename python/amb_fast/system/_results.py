@@ -30,7 +30,7 @@ from ..io import (
     write_npz,
     xarray_module,
 )
-from ..io._results import complex_variable
+from ..io._results import column, complex_variable
 
 if TYPE_CHECKING:
     from ._experiment import EstimateN
@@ -41,12 +41,6 @@ MATRICES = ("H", "receptance", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std
 AMPLITUDES = ("force", "displacement")  # (lines, channel, experiment)
 SUFFIXES = (".nc", ".npz", ".csv")
 _ROTOR_UNITS = {"speed": "rad/s", "transverse_inertia": "kg m^2", "polar_inertia": "kg m^2", "mass": "kg"}
-
-
-def _column(name: str, part: str = "") -> str:
-    """A CSV or DataFrame column: the field, the part of a complex one, its unit (``k_N_per_m``, ``H_real_N_per_m``)."""
-    unit = UNITS[name].replace(" s", "s").replace("/", "_per_")
-    return "_".join(p for p in (name, part, unit) if p)
 
 
 def _fields(est: EstimateN) -> dict[str, np.ndarray]:
@@ -87,9 +81,9 @@ def _long(matrices: dict[str, np.ndarray], freq: np.ndarray, names: Any) -> dict
     columns["i"], columns["j"] = np.asarray(names)[columns["i"]], np.asarray(names)[columns["j"]]
     for name, values in matrices.items():
         if np.iscomplexobj(values):
-            columns[_column(name, "real")], columns[_column(name, "imag")] = values.real.ravel(), values.imag.ravel()
+            columns[column(name, "real")], columns[column(name, "imag")] = values.real.ravel(), values.imag.ravel()
         else:
-            columns[_column(name)] = values.ravel()
+            columns[column(name)] = values.ravel()
     return columns
 
 
@@ -143,8 +137,8 @@ def estimate_from_csv(text: str, name: str) -> EstimateN:
     N = len(meta["axes"])
     require(table.shape[0] % (N * N) == 0, f"{name} rows", table.shape[0], f"a multiple of {N * N} (N x N per line)")
     col = {c: table[:, k].reshape(-1, N, N) for k, c in enumerate(header)}
-    arrays = {n: col[_column(n)] if _column(n) in col else complex_array(col[_column(n, "real")],
-                                                                        col[_column(n, "imag")])
+    arrays = {n: col[column(n)] if column(n) in col else complex_array(col[column(n, "real")],
+                                                                        col[column(n, "imag")])
               for n in MATRICES + AMPLITUDES}  # fmt: skip
     return _build(col["freq_Hz"][:, 0, 0], arrays, meta["periods"], meta["axes"])
 
