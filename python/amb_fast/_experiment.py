@@ -476,7 +476,7 @@ def check_channels(
 def excited_lines(
     force: np.ndarray, period: int, f0: float, fs: float, f_max: float | None, lines, offset: int = 0
 ) -> np.ndarray:  # noqa: ANN001, E501
-    top = period // 2 - 1 if period % 2 == 0 else period // 2  # highest harmonic below Nyquist
+    top = _checks.top_harmonic(period)  # the highest harmonic below Nyquist
     if f_max is not None:
         real("f_max", f_max, "Hz", positive=True)
         require(f0 <= f_max < fs / 2, "f_max", f_max, f"at least f0 ({f0} Hz) and below fs/2 ({fs / 2} Hz)")
