@@ -437,17 +437,12 @@ def check_channels(
     levels: tuple[np.ndarray, ...] | None = None, excited_from: float | None = None, what: str = "force",
     stacklevel: int = 4,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
-    """:func:`identify`'s checks of one recorded force (``what``: or current) and displacement after settling
-    (:func:`amb_fast.system.identify` runs them on every experiment's every axis).
-
-    With ``excited_from`` (a sample of the force, N) refuses (:class:`NoExcitationError`) a force not clearly
-    above its noise at the lines, naming a non-periodic force as the likelier cause. Warns
-    (:class:`NonPeriodicExcitationWarning`) when the force does not repeat with the period, else
-    (:class:`ShortPeriodWarning`) when it repeats with a whole fraction of it. Returns the weak lines and each
-    channel's noise levels (:func:`_checks.noise_levels`). ``drive``: :func:`drive_spectra` of the force;
-    ``levels``: its and the displacement's amplitudes at the lines and levels at the unexcited harmonics as
-    the estimator measured them (else measured here on the period averages). ``stacklevel``: the warnings'.
-    """
+    """:func:`identify`'s checks of one recorded force (``what``: or current) and displacement after settling,
+    which :func:`amb_fast.system.identify` runs on every experiment's every axis: refuses a force with no
+    excitation (given ``excited_from``, a force sample in N), warns when it does not repeat with the period or
+    repeats with a fraction of it; returns the weak lines and both channels' noise levels. ``drive``: the
+    force's :func:`drive_spectra`; ``levels``: the estimator's amplitudes (force, displacement) at the lines and
+    at the unexcited harmonics, else measured here."""
     spectra, others, fraction = drive
     if levels is None:
         excited = harmonics if others is None else np.union1d(harmonics, others)
