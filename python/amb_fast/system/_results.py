@@ -40,7 +40,6 @@ CSV_HEAD = "# amb_fast estimate of N axes"
 MATRICES = ("H", "receptance", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std")
 AMPLITUDES = ("force", "displacement")  # (lines, channel, experiment)
 SUFFIXES = (".nc", ".npz", ".csv")
-_ROTOR_UNITS = {"speed": "rad/s", "transverse_inertia": "kg m^2", "polar_inertia": "kg m^2", "mass": "kg"}
 
 
 def _fields(est: EstimateN) -> dict[str, np.ndarray]:

@@ -37,7 +37,7 @@ from ..io._results import complex_variable
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
 from ._experiment import coefficients, core_args, experiment_forces, experiment_seeds, run_experiment, settle_for
 from ._model import System, loop_models
-from ._results import _ROTOR_UNITS, _long
+from ._results import _long
 
 _AXIS_FIELDS = tuple(f.name for f in fields(Rig) if f.name not in ("force_law", "substeps", "mass"))
 _GAINS = ("kp", "ki", "kd", "derivative_cutoff")
@@ -106,7 +106,9 @@ class SweepResultN(ArrayRecord):
         matrices = ("point", "freq", "out", "in")
         data = {name: (matrices, getattr(self, name), {"units": RESULT_UNITS[name]}) for name in _ESTIMATES}
         data |= {name: (("point",), getattr(self, name), {}) for name in ("stable", "seeds", "status")}
-        coords = {name: (("point",), values, {"units": _param_unit(name)}) for name, values in self.params.items()}
+        coords = {
+            name: (("point",), values, {"units": _param_unit(name, self.axes)}) for name, values in self.params.items()
+        }
         coords |= {"freq": (("freq",), self.freq, {"units": "Hz"}), "out": (("out",), names, {}),
                    "in": (("in",), names, {})}  # fmt: skip
         attrs = {"amb_fast_kind": _KIND, "params": json.dumps(list(self.params)), "axes": json.dumps(self.axes)}
@@ -159,9 +161,17 @@ def _from_file(header: dict[str, Any], contents: Any) -> SweepResultN:  # noqa: 
 register_sweep_kind(_KIND, _from_file)  # amb_fast.load_sweep reads these files too
 
 
-def _param_unit(path: str) -> str:
+#: Units of the numbers a path names beyond a Rig's and a PID's (:func:`unit_of`): a rotor's, a two-axis process's.
+_UNITS = {"speed": "rad/s", "transverse_inertia": "kg m^2", "polar_inertia": "kg m^2", "kxy": "N/m", "kyx": "N/m",
+          "cxy": "N s/m", "cyx": "N s/m", "sensor_angle": "rad"}  # fmt: skip
+
+
+def _param_unit(path: str, axes: tuple[str, ...]) -> str:
+    """The unit of the number at ``path`` (``A.x.amp_bandwidth``, ``x_amp_bandwidth``, ``cross_kp``, ``kxy``)."""
     field = path.rpartition(".")[2]
-    return _ROTOR_UNITS.get(field, "") if path == "speed" or path.startswith("rotor.") else unit_of(field)
+    for prefix in ("cross_", *(f"{axis}_" for axis in axes)):  # an off-diagonal gain; an axis' field (two axes)
+        field = field.removeprefix(prefix)
+    return _UNITS.get(field) or unit_of(field)
 
 
 def _with(part: Any, path: str, value: float, whole: str, expected: str) -> Any:
