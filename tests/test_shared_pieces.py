@@ -1,4 +1,5 @@
-"""Pieces that several parts of the package share instead of repeating: paper eq. 9 (``actual_coefficients``)."""
+"""Pieces that several parts of the package share instead of repeating: paper eq. 9 (``actual_coefficients``), the
+run options' check (``run_options``)."""
 
 from __future__ import annotations
 
