@@ -207,20 +207,17 @@ class SweepResult(ArrayRecord):
         ``receptance_abs_m_per_N`` = abs(Y/F) = 1/abs(H)); NaN in the estimates of points whose status is not ok;
         the metadata (version, rig, controller, seed) in trailing ``#`` lines."""
         from .io import atomic_path
-        from .io._results import trailer
+        from .io._results import sweep_columns, trailer
 
-        names = list(self.points)
-        header = [*names, "status", "freq_Hz", "k_N_per_m", "c_Ns_per_m", "k_std_N_per_m", "c_std_Ns_per_m",
+        header = [*self.points, "status", "freq_Hz", "k_N_per_m", "c_Ns_per_m", "k_std_N_per_m", "c_std_Ns_per_m",
                   "receptance_abs_m_per_N"]  # fmt: skip
+        columns = sweep_columns(self)
         with np.errstate(invalid="ignore"):  # NaN rows of points that are not ok: NaN is their documented value
-            receptance = np.abs(1 / self.H)
+            columns["receptance_abs_m_per_N"] = np.abs(1 / self.H).ravel()
         with atomic_path(Path(path)) as target, target.open("w") as handle:
             handle.write(",".join(header) + "\n")
-            for i in range(self.status.size):
-                for j, f in enumerate(self.freq):
-                    row = [*[self.points[n][i] for n in names], self.status[i], f, self.k[i, j], self.c[i, j],
-                           self.k_std[i, j], self.c_std[i, j], receptance[i, j]]  # fmt: skip
-                    handle.write(",".join(str(v) for v in row) + "\n")
+            for row in zip(*(columns[name] for name in header)):
+                handle.write(",".join(str(v) for v in row) + "\n")
             handle.write(trailer(self.meta))
 
 

@@ -145,14 +145,19 @@ def estimate_to_dataframe(estimate: Estimate):  # noqa: ANN201 - pandas is optio
 
 def sweep_to_dataframe(result: Any):  # noqa: ANN201, ANN401
     """One row per point and line: the swept gains, status, freq_Hz and the estimates."""
-    pd = pandas_module()
+    return pandas_module().DataFrame(sweep_columns(result))
+
+
+def sweep_columns(result: Any) -> dict[str, np.ndarray]:  # noqa: ANN401 - a SweepResult
+    """A one-axis sweep as columns of one row per point and line: the swept parameters, ``status``, ``freq_Hz``,
+    the estimates (their units in the names) and ``H`` as parts; what its DataFrame and its CSV hold."""
     n, lines = result.k.shape
-    columns: dict[str, Any] = {name: np.repeat(values, lines) for name, values in result.points.items()}
+    columns = {name: np.repeat(values, lines) for name, values in result.points.items()}
     columns["status"] = np.repeat(result.status, lines)
     columns["freq_Hz"] = np.tile(result.freq, n)
     columns |= {column(name): getattr(result, name).ravel() for name in _REAL}
     columns[column("H", "real")], columns[column("H", "imag")] = result.H.real.ravel(), result.H.imag.ravel()
-    return pd.DataFrame(columns)
+    return columns
 
 
 def optional_module(name: str, needs: str, extra: str) -> Any:  # noqa: ANN401 - a module
