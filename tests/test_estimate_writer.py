@@ -5,6 +5,7 @@ booleans encoded as xarray encodes them, and it reads back as ``to_xarray()``'s 
 from __future__ import annotations
 
 import dataclasses
+import sys
 import warnings
 
 import numpy as np
@@ -181,3 +182,20 @@ def test_a_failed_write_keeps_the_old_file_and_leaves_no_temporary_file(tmp_path
 def test_what_the_direct_writer_does_not_lay_out_is_left_to_xarray(tmp_path, data, coords) -> None:
     assert write_dataset_netcdf(tmp_path / "x.nc", data, coords, {}) is False
     assert list(tmp_path.iterdir()) == []
+
+
+def test_without_xarray_every_view_and_reader_says_what_needs_it(tmp_path, estimates, monkeypatch) -> None:
+    ms = af.schroeder_multisine(f_max=20.0)
+    path = estimates["odd lines, one weak"].save(tmp_path / "e.nc")
+    results = {
+        "Estimate": estimates["odd lines, one weak"],
+        "SweepResult": af.sweep(af.Rig(), af.PID.paper(), ms, kd=[3.0], periods=2, progress=False),
+        "EstimateN": af.two_axis.run_experiment(af.TwoAxisRig.paper(), af.PID.paper(), ms, periods=2),
+    }
+    monkeypatch.setitem(sys.modules, "xarray", None)  # import xarray now fails as when it is not installed
+    for name, result in results.items():
+        with pytest.raises(ImportError, match=r"^to_xarray needs xarray: pip install 'amb_fast\[xarray\]'$"):
+            result.to_xarray()
+            pytest.fail(f"{name}.to_xarray() without xarray")
+    with pytest.raises(ImportError, match=r"^reading \.nc needs xarray and h5netcdf: pip install 'amb_fast\[xarray\]'"):
+        af.load_estimate(path)

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import amb_fast as af
+from amb_fast._sweep_result import unit_of
 
 FIELDS = ("H", "k", "c", "k_std", "c_std", "k_smooth", "c_smooth", "unexcited_displacement")
 
@@ -140,6 +141,22 @@ def test_touchdown_is_flagged_and_the_rest_is_intact() -> None:
 
 
 @pytest.mark.parametrize("suffix", [".npz", ".nc"])
+def test_a_loaded_sweep_keeps_every_bit_of_H(setup, tmp_path, suffix) -> None:
+    # The .nc file holds H as H_real and H_imag: joined back as written (``real + 1j * imag`` made -0.0 into
+    # 0.0 and an infinite imaginary part into a NaN real one).
+    rig, pid, excitation = setup
+    result = af.sweep(rig, pid, excitation, kd=[4.0, 5.0], periods=2)
+    H = result.H.copy()
+    H[0, 0], H[0, 1], H[1, 2] = complex(1.5, -0.0), complex(-2.0, np.inf), complex(-0.0, 3.0)
+    path = tmp_path / f"sweep{suffix}"
+    replace(result, H=H).save(path)
+    back = af.load_sweep(path).H
+    for part in ("real", "imag"):
+        np.testing.assert_array_equal(getattr(back, part), getattr(H, part))
+        np.testing.assert_array_equal(np.signbit(getattr(back, part)), np.signbit(getattr(H, part)))
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".nc"])
 def test_save_load_round_trip_and_xarray(setup, tmp_path, suffix) -> None:
     if suffix == ".nc":
         pytest.importorskip("xarray")
@@ -168,6 +185,16 @@ def test_to_xarray_dims_and_coordinates(setup) -> None:
     assert ds.k.attrs["units"] == "N/m"
     # The grid point (kp=2400, kd=4) is row 3 of the flat result.
     np.testing.assert_array_equal(ds.k.sel(kp=2400.0, kd=4.0), result.k[3])
+
+
+def test_a_swept_dead_time_and_fs_carry_their_units(setup) -> None:
+    # The sweep's units are the parameters' own table: dead_time in s, fs in Hz (both were reported as "").
+    rig, pid, excitation = setup
+    result = af.sweep(rig, pid, excitation, dead_time=[0.0, 1e-4], periods=2)
+    assert "dead_time: [0, 0.0001] s" in repr(result)
+    assert (unit_of("dead_time"), unit_of("fs"), unit_of("kp")) == ("s", "Hz", "A/m")
+    pytest.importorskip("xarray")
+    assert result.to_xarray().dead_time.attrs["units"] == "s"
 
 
 def test_vectorised_prediction_matches_one_by_one(setup) -> None:

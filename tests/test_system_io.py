@@ -146,6 +146,19 @@ def test_sweep_views(rotor_sweep) -> None:
 # -- the figure ---------------------------------------------------------------------------------------------------
 
 
+def test_every_swept_path_carries_its_unit() -> None:
+    # A two-axis process's numbers, an off-diagonal gain and the two-axis spelling of an axis' field had no unit.
+    pytest.importorskip("xarray")
+    paths = {"kxy": [0.0, 1e4], "cyx": [0.0, 1.0], "sensor_angle": [0.0, 0.01], "cross_kp": [0.0, 1.0],
+             "x_amp_bandwidth": [1e3, 2e3], "y.dead_time": [0.0, 1e-5], "kd": [3.0, 4.0]}  # fmt: skip
+    result = af.two_axis.sweep(af.TwoAxisRig.paper(), af.PID.paper(), af.schroeder_multisine(f_max=20.0), grid="zip",
+                               periods=2, **paths)  # fmt: skip
+    ds = result.to_xarray()
+    assert {path: ds[path].attrs["units"] for path in paths} == {
+        "kxy": "N/m", "cyx": "N s/m", "sensor_angle": "rad", "cross_kp": "A/m", "x_amp_bandwidth": "Hz",
+        "y.dead_time": "s", "kd": "A s/m"}  # fmt: skip
+
+
 def _panels(fig) -> dict[str, object]:  # noqa: ANN001
     return {ax.get_title(): ax for ax in fig.axes if ax.get_visible()}
 

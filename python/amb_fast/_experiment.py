@@ -145,6 +145,14 @@ class Estimate(EstimateBase):
         return to_ross(self, n, smoothed=smoothed, **kwargs)
 
 
+def actual_coefficients(H: np.ndarray, freq: np.ndarray, mass: float) -> tuple[np.ndarray, np.ndarray]:
+    """Actual stiffness k (N/m) and damping c (N s/m) from the dynamic stiffness ``H`` = F/Y (N/m) at ``freq``
+    (Hz) of a known ``mass`` (kg), paper eq. 9: ``k = m w^2 + Re H``, ``c = Im H / w`` (the core's estimator
+    computes the same)."""
+    w = 2 * np.pi * np.asarray(freq, dtype=float)
+    return mass * w**2 + H.real, H.imag / w
+
+
 def _plan(harmonics: np.ndarray, period: int, skip: np.ndarray | None = None) -> tuple[_core.LinePlan, np.ndarray]:
     """The core's plan for these excited harmonics, and the unexcited ones below the highest (read-only;
     made once per distinct excitation). ``skip``: harmonics the force excites beyond the chosen ones, which
@@ -198,6 +206,16 @@ def median_window_value(median_window: int) -> int:
     window = integer("median_window", median_window, 1)
     require(window % 2 == 1, "median_window", median_window, "odd")
     return window
+
+
+def run_options(periods: int, settle_periods: int | None, median_window: int, start: str) -> dict[str, Any]:
+    """The run options of :func:`run_experiment` (one axis or N) and of every point of a sweep, checked:
+    at least two ``periods``, ``settle_periods`` None (automatic) or >= 0, an odd ``median_window``, ``start``
+    'steady' or 'rest'."""
+    require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
+    settle = None if settle_periods is None else integer("settle_periods", settle_periods, 0)
+    periods = integer("periods", periods, 2)
+    return dict(periods=periods, settle_periods=settle, median_window=median_window_value(median_window), start=start)
 
 
 MAX_AUTOMATIC_SETTLE = 10_000
@@ -272,14 +290,12 @@ def run_experiment(
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
     pid = controller
     require(excitation.fs == pid.fs, "excitation.fs", excitation.fs, f"equal to the controller's fs ({pid.fs} Hz)")
-    periods = integer("periods", periods, 2)
-    window = median_window_value(median_window)
+    options = run_options(periods, settle_periods, median_window, start)
+    periods, settle_periods, window = options["periods"], options["settle_periods"], options["median_window"]
     period = excitation.period_samples
-    require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
     poles = require_stable(rig, pid)
     if settle_periods is None:  # the same rule as amb_fast.sweep, so a sweep point reruns bit for bit
         settle_periods = automatic_settle(rig, pid, float(np.max(np.abs(poles), initial=0.0)), period, start)
-    settle_periods = integer("settle_periods", settle_periods, 0)
     harmonics = excitation.harmonics
     plan, unexcited = _plan(harmonics, period)
     seed = seed_value(seed)
@@ -374,12 +390,8 @@ def identify(
             ">= 2 (standard errors need at least two)")  # fmt: skip
     clearance = optional_positive("clearance", clearance, "m")
     harmonics = excited_lines(force[start:], period, f0, fs, f_max, lines, offset=start)
-    # A few periods' force spectra: the harmonics it excites beyond the chosen lines (lines= or f_max=), which
-    # are neither estimated nor noise, and whether it repeats with the period at all (a wrong fs or f0).
-    spectra = _checks.period_spectra(force[start:], period)
-    chosen = lines is not None or f_max is not None
-    others = np.setdiff1d(_checks.excited_harmonics(spectra), harmonics) if chosen else None
-    plan, unexcited = _plan(harmonics, period, skip=others)
+    drive = drive_spectra(force[start:], period, harmonics, chosen=lines is not None or f_max is not None)
+    plan, unexcited = _plan(harmonics, period, skip=drive[1])
     try:
         raw = _core.identify(force, displacement, settle_periods, plan, mass, fs, window)
     except ValueError:
@@ -391,25 +403,11 @@ def identify(
             raise _checks.NoExcitationError(f"force has no excitation at the chosen lines: it is zero or constant "
                                             f"there ({force[start]:g} N)") from None  # fmt: skip
         raise
-    excited = harmonics if others is None else np.union1d(harmonics, others)
-    fraction = _checks.non_periodic_fraction(spectra, excited)
-    force_noise = _checks.noise_levels(force[start:], period, harmonics, raw.unexcited_force, skip=others)
-    try:
-        _checks.require_excitation(raw.force, force_noise, offset=max(abs(force[start]), abs(force[-1])))
-    except _checks.NoExcitationError as error:
-        if fraction > _checks.NON_PERIODIC:  # the likelier cause: say it in the error
-            message = _checks.non_periodic_message(fraction, fs, f0, period, spectra.shape[0])
-            raise _checks.NoExcitationError(f"{error}; also, {message}") from None
-        raise
-    if fraction > _checks.NON_PERIODIC:
-        message = _checks.non_periodic_message(fraction, fs, f0, period, spectra.shape[0])
-        warnings.warn(NonPeriodicExcitationWarning(message, fraction), stacklevel=3)
-    else:  # periodic, perhaps with a whole fraction of the period (fs too large by that factor)
-        _checks.warn_short_period(_checks.excited_harmonics(spectra), fs, f0, period)
-    displacement_noise = _checks.noise_levels(
-        displacement[start:], period, harmonics, raw.unexcited_displacement, skip=others
-    )
-    weak = _checks.weak_lines(raw.force, raw.displacement, force_noise, displacement_noise)
+    levels = (raw.force, raw.displacement, raw.unexcited_force, raw.unexcited_displacement)
+    weak, force_noise, displacement_noise = check_channels(
+        force[start:], displacement[start:], period, harmonics, drive, fs, f0, levels=levels,
+        excited_from=max(abs(force[start]), abs(force[-1])),
+    )  # fmt: skip
     _checks.warn_mostly_weak(weak, _checks.floor(force_noise), _checks.floor(displacement_noise))
     _checks.warn_transient(displacement[start:], period)
     inertia = mass * (2 * np.pi * harmonics * fs / period) ** 2
@@ -420,10 +418,60 @@ def identify(
     return _estimate(raw, harmonics, unexcited, f0, meta=meta, weak=weak)
 
 
+def drive_spectra(
+    force: np.ndarray, period: int, harmonics: np.ndarray, chosen: bool
+) -> tuple[np.ndarray, np.ndarray | None, float]:
+    """What :func:`check_channels` reads of the force (or the current driving the loop), after settling: a few
+    periods' spectra; the harmonics it excites beyond the lines when ``lines=`` or ``f_max=`` ``chosen`` them
+    (neither estimated nor taken for noise; else None); the share of its power that does not repeat at the
+    excited harmonics (a wrong fs or f0)."""
+    spectra = _checks.period_spectra(force, period)
+    others = np.setdiff1d(_checks.excited_harmonics(spectra), harmonics) if chosen else None
+    excited = harmonics if others is None else np.union1d(harmonics, others)
+    return spectra, others, _checks.non_periodic_fraction(spectra, excited)
+
+
+def check_channels(
+    force: np.ndarray, displacement: np.ndarray, period: int, harmonics: np.ndarray,
+    drive: tuple[np.ndarray, np.ndarray | None, float], fs: float, f0: float, *,
+    levels: tuple[np.ndarray, ...] | None = None, excited_from: float | None = None, what: str = "force",
+    stacklevel: int = 4,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """:func:`identify`'s checks of one recorded force (``what``: or current) and displacement after settling,
+    which :func:`amb_fast.system.identify` runs on every experiment's every axis: refuses a force with no
+    excitation (given ``excited_from``, a force sample in N), warns when it does not repeat with the period or
+    repeats with a fraction of it; returns the weak lines and both channels' noise levels. ``drive``: the
+    force's :func:`drive_spectra`; ``levels``: the estimator's amplitudes (force, displacement) at the lines and
+    at the unexcited harmonics, else measured here."""
+    spectra, others, fraction = drive
+    if levels is None:
+        excited = harmonics if others is None else np.union1d(harmonics, others)
+        gaps = np.setdiff1d(np.arange(1, harmonics.max()), excited)  # the unexcited harmonics below the top
+        averages = [np.fft.rfft(x.reshape(-1, period).mean(axis=0)) * (2.0 / period) for x in (force, displacement)]
+        levels = (*(a[harmonics] for a in averages), *(np.abs(a[gaps]) for a in averages))
+    force_lines, displacement_lines, unexcited_force, unexcited_displacement = levels
+    force_noise = _checks.noise_levels(force, period, harmonics, unexcited_force, skip=others)
+    message = _checks.non_periodic_message(fraction, fs, f0, period, spectra.shape[0], what=what)
+    if excited_from is not None:
+        try:
+            _checks.require_excitation(force_lines, force_noise, offset=excited_from)
+        except _checks.NoExcitationError as error:
+            if fraction > _checks.NON_PERIODIC:  # the likelier cause: say it in the error
+                raise _checks.NoExcitationError(f"{error}; also, {message}") from None
+            raise
+    if fraction > _checks.NON_PERIODIC:
+        warnings.warn(NonPeriodicExcitationWarning(message, fraction), stacklevel=stacklevel)
+    else:  # periodic, perhaps with a whole fraction of the period (fs too large by that factor)
+        _checks.warn_short_period(_checks.excited_harmonics(spectra), fs, f0, period, stacklevel + 1, what=what)
+    displacement_noise = _checks.noise_levels(displacement, period, harmonics, unexcited_displacement, skip=others)
+    weak = _checks.weak_lines(force_lines, displacement_lines, force_noise, displacement_noise)
+    return weak, force_noise, displacement_noise
+
+
 def excited_lines(
     force: np.ndarray, period: int, f0: float, fs: float, f_max: float | None, lines, offset: int = 0
 ) -> np.ndarray:  # noqa: ANN001, E501
-    top = period // 2 - 1 if period % 2 == 0 else period // 2  # highest harmonic below Nyquist
+    top = _checks.top_harmonic(period)  # the highest harmonic below Nyquist
     if f_max is not None:
         real("f_max", f_max, "Hz", positive=True)
         require(f0 <= f_max < fs / 2, "f_max", f_max, f"at least f0 ({f0} Hz) and below fs/2 ({fs / 2} Hz)")

@@ -16,7 +16,7 @@ from . import _core
 from ._blas import blas_on_one_thread, blas_parked
 from ._dispatch import axes_aware
 from ._excitation import Multisine
-from ._experiment import _plan, automatic_settle, median_window_value
+from ._experiment import _plan, automatic_settle, run_options
 from ._linear import AnyController, _gain_arrays, core_controller, is_controller, loop_poles
 from ._linear_poles import _closed_loop_stacks, _radius_of_gains
 from ._params import PID, Rig
@@ -204,14 +204,6 @@ def progress_bar(progress: bool | None, total: int):  # noqa: ANN202
     return tqdm(total=total, unit="point", desc="sweep")
 
 
-def sweep_options(periods: int, settle_periods: int | None, median_window: int, start: str) -> dict[str, Any]:
-    """A sweep's run options, checked as :func:`run_experiment` checks them."""
-    require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
-    settle = None if settle_periods is None else integer("settle_periods", settle_periods, 0)
-    periods = integer("periods", periods, 2)
-    return dict(periods=periods, settle_periods=settle, median_window=median_window_value(median_window), start=start)
-
-
 def run_points(
     run: Callable[..., dict[str, np.ndarray]], fixed: tuple, points: dict[str, np.ndarray], seeds: np.ndarray, *,
     workers: int | None, executor: Executor | None, progress: bool | None, bytes_per_point: int,
@@ -382,7 +374,7 @@ def sweep(
     >>> notched.points["notch_freq"]
     array([500., 900.])
     """
-    options = sweep_options(periods, settle_periods, median_window, start)
+    options = run_options(periods, settle_periods, median_window, start)
     factory: Factory | None = None
     base_controller: Any
     if callable(rig) and not isinstance(rig, Rig) and not is_controller(rig):

@@ -14,16 +14,11 @@ from numpy.typing import ArrayLike
 
 from ._equality import UNITS as FIELD_UNITS
 from ._equality import ArrayRecord
+from ._params import UNITS
 from ._validate import require
 
 SWEPT = ("kp", "ki", "kd")  # the PID gains: swept together in closed form
 STATUS = ("ok", "unstable", "touchdown", "saturated")  # index = the core's PointStatus
-UNITS = {
-    "kp": "A/m", "ki": "A/(m s)", "kd": "A s/m", "derivative_cutoff": "Hz", "mass": "kg", "kyy": "N/m",
-    "kiy": "N/A", "bias_current": "A", "amp_bandwidth": "Hz", "eddy_bandwidth": "Hz", "sensor_bandwidth": "Hz",
-    "sensor_noise": "m rms", "force_noise": "N rms", "mass_loading": "kg", "force_coupling_tau": "s",
-    "clearance": "m", "current_limit": "A",
-}  # fmt: skip
 
 
 def unit_of(name: str) -> str:
@@ -149,12 +144,10 @@ class SweepResult(ArrayRecord):
 
     def to_xarray(self):  # noqa: ANN201 - xarray is optional
         """An ``xarray.Dataset`` with one dimension per swept parameter (product grids) or ``point``, and ``freq``."""
-        try:
-            import xarray as xr
-        except ImportError as error:
-            raise ImportError("to_xarray needs xarray: pip install 'amb_fast[xarray]'") from error
+        from .io import xarray_module
+
         data, coords, attrs = self._dataset_parts()
-        return xr.Dataset(data, coords=coords, attrs=attrs)
+        return xarray_module().Dataset(data, coords=coords, attrs=attrs)
 
     def _dataset_parts(self) -> tuple[dict[str, tuple], dict[str, tuple], dict[str, Any]]:
         """The dataset's data variables and coordinates as ``name: (dims, values, attrs)``, and its
@@ -214,20 +207,17 @@ class SweepResult(ArrayRecord):
         ``receptance_abs_m_per_N`` = abs(Y/F) = 1/abs(H)); NaN in the estimates of points whose status is not ok;
         the metadata (version, rig, controller, seed) in trailing ``#`` lines."""
         from .io import atomic_path
-        from .io._results import trailer
+        from .io._results import sweep_columns, trailer
 
-        names = list(self.points)
-        header = [*names, "status", "freq_Hz", "k_N_per_m", "c_Ns_per_m", "k_std_N_per_m", "c_std_Ns_per_m",
+        header = [*self.points, "status", "freq_Hz", "k_N_per_m", "c_Ns_per_m", "k_std_N_per_m", "c_std_Ns_per_m",
                   "receptance_abs_m_per_N"]  # fmt: skip
+        columns = sweep_columns(self)
         with np.errstate(invalid="ignore"):  # NaN rows of points that are not ok: NaN is their documented value
-            receptance = np.abs(1 / self.H)
+            columns["receptance_abs_m_per_N"] = np.abs(1 / self.H).ravel()
         with atomic_path(Path(path)) as target, target.open("w") as handle:
             handle.write(",".join(header) + "\n")
-            for i in range(self.status.size):
-                for j, f in enumerate(self.freq):
-                    row = [*[self.points[n][i] for n in names], self.status[i], f, self.k[i, j], self.c[i, j],
-                           self.k_std[i, j], self.c_std[i, j], receptance[i, j]]  # fmt: skip
-                    handle.write(",".join(str(v) for v in row) + "\n")
+            for row in zip(*(columns[name] for name in header)):
+                handle.write(",".join(str(v) for v in row) + "\n")
             handle.write(trailer(self.meta))
 
 
@@ -235,10 +225,10 @@ def save_netcdf_with_xarray(result: SweepResult, path: Path) -> None:
     """The sweep's ``.nc`` file as xarray writes :meth:`SweepResult.to_xarray`'s Dataset: for grids the
     direct writer (``io._netcdf.write_sweep_netcdf``) does not lay out, and its reference in the tests."""
     from .io import write_netcdf
+    from .io._netcdf import split_complex
 
-    ds = result.to_xarray()
-    ds["H_real"], ds["H_imag"] = ds.H.real, ds.H.imag
-    write_netcdf(ds.drop_vars("H").assign(status=ds.status.astype(str)), path)
+    ds = split_complex(result.to_xarray())
+    write_netcdf(ds.assign(status=ds.status.astype(str)), path)
 
 
 _ARRAYS = ("freq", "H", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std", "status", "settle_periods", "seeds",
@@ -310,6 +300,8 @@ def load_sweep(path: str | Path) -> Any:  # noqa: ANN401 - a SweepResult or a Sw
     >>> bool(np.array_equal(back.k, result.k)), back.points["kd"]
     (True, array([2., 3.]))
     """
+    from .io import complex_array
+
     kind, header, contents = read_sweep_file(path)
     if kind in _READERS:
         return _READERS[kind](header, contents)
@@ -335,7 +327,7 @@ def load_sweep(path: str | Path) -> Any:  # noqa: ANN401 - a SweepResult or a Sw
         axes=axes,
         grid=grid,
         freq=np.asarray(ds.freq.values),
-        H=rows("H_real") + 1j * rows("H_imag"),
+        H=complex_array(rows("H_real"), rows("H_imag")),
         unexcited_freq=np.asarray(ds.unexcited_freq.values),
         periods=int(header["periods"]),
         blocks=int(header["blocks"]),

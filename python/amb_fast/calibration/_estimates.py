@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._experiment import Estimate, UnexcitedLines
+from .._experiment import Estimate, UnexcitedLines, actual_coefficients
 from ..io import load_estimate
 from ._problem import FITTABLE, same_controller
 
@@ -51,11 +51,10 @@ def read_estimate(path: str | Path, *, blocks: int | None, mass: float) -> Estim
     table = np.atleast_1d(table)
     freq = np.asarray(table["freq_Hz"], dtype=float)
     H = table["H_real_N_per_m"] + 1j * table["H_imag_N_per_m"]
-    w = 2 * np.pi * freq
-    k = mass * w**2 + H.real
+    k, c = actual_coefficients(H, freq, mass)
     nan = np.full(freq.shape, np.nan + 0j)
     return Estimate(
-        freq=freq, H=H, receptance=1.0 / H, k=k, c=H.imag / w, k_smooth=k, c_smooth=H.imag / w,
+        freq=freq, H=H, receptance=1.0 / H, k=k, c=c, k_smooth=k, c_smooth=c,
         k_std=np.asarray(table["k_std_N_per_m"], dtype=float), c_std=np.asarray(table["c_std_Ns_per_m"], dtype=float),
         force=nan, displacement=nan, unexcited=UnexcitedLines(np.empty(0), np.empty(0), np.empty(0)),
         periods=blocks, blocks=blocks,

@@ -23,7 +23,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ._atomic import atomic_path
-from ._results import _jsonable, digest, estimate_dataset_parts, estimate_to_xarray, version
+from ._results import (
+    _jsonable,
+    digest,
+    estimate_dataset_parts,
+    estimate_to_xarray,
+    optional_module,
+    version,
+    xarray_module,
+)
 
 if TYPE_CHECKING:
     from .._experiment import Estimate
@@ -144,11 +152,9 @@ def write_dataset_netcdf(path: str | Path, data: dict[str, Part], coords: dict[s
     variables = _file_variables(data, coords)
     if variables is None:
         return False
-    try:
-        import h5netcdf
-        import h5py
-    except ImportError as error:
-        raise ImportError("writing .nc needs h5netcdf and h5py: pip install 'amb_fast[xarray]'") from error
+    needs = "writing .nc needs h5netcdf and h5py"
+    h5netcdf = optional_module("h5netcdf", needs, "xarray")
+    h5py = optional_module("h5py", needs, "xarray")
     attrs = {**attrs, "amb_fast_version": version()}
     attrs["sha256"] = _variables_digest({name: values for name, (_, values, _) in variables.items()}, attrs)
     require_space(path, sum(values.nbytes for _, values, _ in variables.values()))
@@ -190,12 +196,18 @@ def write_estimate_netcdf(estimate: Estimate, path: str | Path) -> Path:
 def save_estimate_with_xarray(estimate: Estimate, path: str | Path) -> Path:
     """The estimate's ``.nc`` file as xarray writes :meth:`Estimate.to_xarray`'s Dataset, its complex variables
     split: the reference of :func:`write_estimate_netcdf` in the tests."""
-    ds = estimate_to_xarray(estimate)
+    return write_netcdf(split_complex(estimate_to_xarray(estimate)), path)
+
+
+def split_complex(ds):  # noqa: ANN001, ANN201 - an xarray Dataset
+    """``ds`` with each complex data variable ``name`` as ``name_real`` and ``name_imag`` (after the others, with
+    the attributes of ``name``): how amb_fast's ``.nc`` files hold complex numbers (``complex_variable`` joins
+    them back)."""
     for name in [n for n in ds.data_vars if np.iscomplexobj(ds[n])]:
         ds[f"{name}_real"], ds[f"{name}_imag"] = ds[name].real, ds[name].imag
         ds[f"{name}_real"].attrs = ds[f"{name}_imag"].attrs = dict(ds[name].attrs)
         ds = ds.drop_vars(name)
-    return write_netcdf(ds, path)
+    return ds
 
 
 def write_sweep_netcdf(result: SweepResult, path: str | Path) -> Path:
@@ -255,10 +267,7 @@ def _check_file_digest(path: Path) -> None:
 
 def read_netcdf(path: str | Path):  # noqa: ANN201
     """Read a Dataset written by :func:`write_netcdf`, refusing one whose checksums do not match."""
-    try:
-        import xarray as xr
-    except ImportError as error:
-        raise ImportError("reading .nc needs xarray and h5netcdf: pip install 'amb_fast[xarray]'") from error
+    xr = xarray_module("reading .nc needs xarray and h5netcdf")
     path = Path(path)
     _check_file_digest(path)
     try:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import importlib
 import json
 import zipfile
 import zlib
@@ -18,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._equality import UNITS as FIELD_UNITS
 from .._validate import require
 from ._atomic import atomic_path, atomic_text
 
@@ -56,8 +58,14 @@ _COLUMNS = (  # CSV column -> (Estimate field or expression, unit)
     "displacement_imag_m", "force_abs_N", "displacement_abs_m", "receptance_abs_m_per_N",
 )  # fmt: skip
 _REAL = ("k", "c", "k_smooth", "c_smooth", "k_std", "c_std")
-UNITS = {"H": "N/m", "receptance": "m/N", "k": "N/m", "c": "N s/m", "k_smooth": "N/m", "c_smooth": "N s/m",
-         "k_std": "N/m", "c_std": "N s/m", "force": "N", "displacement": "m"}  # fmt: skip
+#: The estimate's arrays over ``freq`` and their units (the records' own table), in the files' order.
+UNITS = {name: FIELD_UNITS[name] for name in ("H", "receptance", *_REAL, "force", "displacement")}
+
+
+def column(name: str, part: str = "") -> str:
+    """A CSV or DataFrame column: the field, the part of a complex one, its unit (``k_N_per_m``, ``H_real_N_per_m``)."""
+    unit = UNITS[name].replace(" s", "s").replace("/", "_per_")
+    return "_".join(p for p in (name, part, unit) if p)
 
 
 def version() -> str:
@@ -137,32 +145,37 @@ def estimate_to_dataframe(estimate: Estimate):  # noqa: ANN201 - pandas is optio
 
 def sweep_to_dataframe(result: Any):  # noqa: ANN201, ANN401
     """One row per point and line: the swept gains, status, freq_Hz and the estimates."""
-    pd = pandas_module()
+    return pandas_module().DataFrame(sweep_columns(result))
+
+
+def sweep_columns(result: Any) -> dict[str, np.ndarray]:  # noqa: ANN401 - a SweepResult
+    """A one-axis sweep as columns of one row per point and line: the swept parameters, ``status``, ``freq_Hz``,
+    the estimates (their units in the names) and ``H`` as parts; what its DataFrame and its CSV hold."""
     n, lines = result.k.shape
-    columns: dict[str, Any] = {name: np.repeat(values, lines) for name, values in result.points.items()}
+    columns = {name: np.repeat(values, lines) for name, values in result.points.items()}
     columns["status"] = np.repeat(result.status, lines)
     columns["freq_Hz"] = np.tile(result.freq, n)
-    for name, unit in (("k", "N_per_m"), ("c", "Ns_per_m"), ("k_smooth", "N_per_m"), ("c_smooth", "Ns_per_m"),
-                       ("k_std", "N_per_m"), ("c_std", "Ns_per_m")):  # fmt: skip
-        columns[f"{name}_{unit}"] = getattr(result, name).ravel()
-    columns["H_real_N_per_m"], columns["H_imag_N_per_m"] = result.H.real.ravel(), result.H.imag.ravel()
-    return pd.DataFrame(columns)
+    columns |= {column(name): getattr(result, name).ravel() for name in _REAL}
+    columns[column("H", "real")], columns[column("H", "imag")] = result.H.real.ravel(), result.H.imag.ravel()
+    return columns
+
+
+def optional_module(name: str, needs: str, extra: str) -> Any:  # noqa: ANN401 - a module
+    """Import an optional dependency, or raise ImportError saying what ``needs`` it and the amb_fast ``extra``
+    that installs it."""
+    try:
+        return importlib.import_module(name)
+    except ImportError as error:
+        raise ImportError(f"{needs}: pip install 'amb_fast[{extra}]'") from error
 
 
 def pandas_module():  # noqa: ANN202
-    try:
-        import pandas as pd
-    except ImportError as error:
-        raise ImportError("to_dataframe needs pandas: pip install 'amb_fast[dataframe]'") from error
-    return pd
+    return optional_module("pandas", "to_dataframe needs pandas", "dataframe")
 
 
-def xarray_module():  # noqa: ANN202
-    try:
-        import xarray as xr
-    except ImportError as error:
-        raise ImportError("to_xarray needs xarray: pip install 'amb_fast[xarray]'") from error
-    return xr
+def xarray_module(needs: str = "to_xarray needs xarray"):  # noqa: ANN202
+    """xarray, or an ImportError that says what ``needs`` it and how to install it."""
+    return optional_module("xarray", needs, "xarray")
 
 
 def _weak(estimate: Estimate) -> np.ndarray:
@@ -233,6 +246,12 @@ def complex_array(real: np.ndarray, imag: np.ndarray) -> np.ndarray:
     return out
 
 
+def complex_variable(ds: Any, name: str) -> np.ndarray:  # noqa: ANN401 - an xarray Dataset
+    """The complex variable ``name`` of a Dataset read from a ``.nc`` file, from its ``name_real`` and ``name_imag``
+    (``_netcdf.split_complex``), bit for bit."""
+    return complex_array(np.asarray(ds[f"{name}_real"].values), np.asarray(ds[f"{name}_imag"].values))
+
+
 def load_estimate(path: str | Path) -> Estimate | EstimateN:
     """Read an estimate written by :meth:`Estimate.save` (``.csv`` or ``.nc``) or :meth:`EstimateN.save`
     (``.csv``, ``.nc`` or ``.npz``: an :class:`EstimateN`); a damaged file is refused, naming it."""
@@ -284,8 +303,7 @@ def estimate_fields_from_csv(text: str) -> dict[str, Any]:
 def estimate_fields_from_dataset(ds: Any) -> dict[str, Any]:  # noqa: ANN401 - an xarray Dataset
     """:class:`Estimate`'s fields (``unexcited``: its three arrays) from its ``.nc`` file's Dataset."""
     arrays = {n: np.asarray(ds[n].values) for n in (*_REAL, "freq")}
-    for n in ("H", "force", "displacement"):
-        arrays[n] = complex_array(np.asarray(ds[f"{n}_real"].values), np.asarray(ds[f"{n}_imag"].values))
+    arrays |= {n: complex_variable(ds, n) for n in ("H", "force", "displacement")}
     arrays["weak"] = np.asarray(ds.weak.values).astype(bool)
     unexcited = (ds.unexcited_freq.values, ds.unexcited_force.values, ds.unexcited_displacement.values)
     return _fields(json.loads(ds.attrs["amb_fast"]), arrays, tuple(np.asarray(v) for v in unexcited))

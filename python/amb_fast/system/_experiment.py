@@ -22,11 +22,11 @@ from numpy.typing import ArrayLike
 from .. import _core
 from .._equality import ArrayRecord
 from .._excitation import Multisine
-from .._experiment import EstimateBase, median_window_value, settle_from
+from .._experiment import EstimateBase, run_options, settle_from
 from .._mechanics import Mechanics
 from .._ross import to_ross
 from .._simulate import Channels
-from .._validate import integer, require, seed_value
+from .._validate import require, seed_value
 from ..plots import plot_coefficients_n
 from . import _results
 from ._control import ControllerSpec, controller_matrix
@@ -365,9 +365,8 @@ def run_experiment(
     the force; ``process`` removes it as the model knows it.
     """
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
-    periods = integer("periods", periods, 2)
-    window = median_window_value(median_window)
-    require(start in ("steady", "rest"), "start", start, "'steady' or 'rest'")
+    options = run_options(periods, settle_periods, median_window, start)
+    periods, settle_periods, window = options["periods"], options["settle_periods"], options["median_window"]
     require(exciter in ("shaker", "amb"), "exciter", exciter, "'shaker' (the shakers' forces) or 'amb' (the bearings)")
     mech = system.mechanics()
     N = mech.axes
@@ -376,9 +375,9 @@ def run_experiment(
     what = "the closed loop" + (f" at speed {mech.speed:g} rad/s" if mech.speed else "")
     poles = require_stable(system, spec, what)
     model = loop_model(system, spec)
-    if settle_periods is None:
-        settle_periods = 0 if start == "steady" else settle_for(system, spec.fs, poles, excitation.period_samples)
-    settle = integer("settle_periods", settle_periods, 0)
+    settle = settle_periods
+    if settle is None:
+        settle = 0 if start == "steady" else settle_for(system, spec.fs, poles, excitation.period_samples)
     forces = experiment_forces(excitation, N)  # (experiment, sample, axis)
     seeds = experiment_seeds(seed, N)
     harmonics = excitation.harmonics

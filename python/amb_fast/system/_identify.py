@@ -15,9 +15,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _checks
-from .._errors import IdentificationWarning, NonPeriodicExcitationWarning
+from .._errors import IdentificationWarning
 from .._excitation import period_samples
-from .._experiment import excited_lines, median_window_value
+from .._experiment import check_channels, drive_spectra, excited_lines, median_window_value
 from .._mechanics import Mechanics
 from .._params import Rig
 from .._validate import integer, real, require
@@ -230,19 +230,11 @@ def _check(
         for e in range(E):
             for j in range(N):
                 where = f"experiment {e}, axis {est.axes[j]}"
-                spectra = _checks.period_spectra(F[e, :, j], period)
-                others = np.setdiff1d(_checks.excited_harmonics(spectra), harmonics) if chosen else None
-                excited = harmonics if others is None else np.union1d(harmonics, others)
-                fraction = _checks.non_periodic_fraction(spectra, excited)
-                if fraction > _checks.NON_PERIODIC:
-                    message = _checks.non_periodic_message(fraction, fs, f0, period, spectra.shape[0], what=what)
-                    warnings.warn(NonPeriodicExcitationWarning(message, fraction), stacklevel=2)
-                else:
-                    _checks.warn_short_period(_checks.excited_harmonics(spectra), fs, f0, period, what=what)
-                gaps = np.setdiff1d(np.arange(1, harmonics.max()), excited)
-                x, y = (_line_levels(v, period, harmonics, gaps, others) for v in (F[e, :, j], Y[e, :, j]))
-                weak |= _checks.weak_lines(x[0], y[0], x[1], y[1])
-                floors = np.fmax(floors, [_checks.floor(x[1]) or 0.0, _checks.floor(y[1]) or 0.0])
+                drive = drive_spectra(F[e, :, j], period, harmonics, chosen)
+                found, force_noise, displacement_noise = check_channels(F[e, :, j], Y[e, :, j], period, harmonics,
+                                                                        drive, fs, f0, what=what)  # fmt: skip
+                weak |= found
+                floors = np.fmax(floors, [_checks.floor(force_noise) or 0.0, _checks.floor(displacement_noise) or 0.0])
                 _checks.warn_transient(Y[e, :, j], period)
                 tags += [where] * (len(caught) - len(tags))
         _checks.warn_mostly_weak(weak, floors[0], floors[1], what=(what, unit))
@@ -262,10 +254,3 @@ def _check(
             note = w.message if isinstance(w.message, Warning) else w.category(w.message)
             note.args = (f"{where}: {note.args[0]}", *note.args[1:])  # keeps its attributes (fraction, ...)
             warnings.warn(note, stacklevel=3)
-
-
-def _line_levels(x: np.ndarray, period: int, harmonics: np.ndarray, gaps: np.ndarray, others: np.ndarray | None,
-                 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """One channel's period-averaged amplitudes at the lines, and the levels that show its noise."""
-    spectrum = np.fft.rfft(x.reshape(-1, period).mean(axis=0)) * (2.0 / period)
-    return spectrum[harmonics], _checks.noise_levels(x, period, harmonics, np.abs(spectrum[gaps]), skip=others)

@@ -30,6 +30,7 @@ from ..io import (
     write_npz,
     xarray_module,
 )
+from ..io._results import column, complex_variable
 
 if TYPE_CHECKING:
     from ._experiment import EstimateN
@@ -39,13 +40,6 @@ CSV_HEAD = "# amb_fast estimate of N axes"
 MATRICES = ("H", "receptance", "k", "c", "k_smooth", "c_smooth", "k_std", "c_std")
 AMPLITUDES = ("force", "displacement")  # (lines, channel, experiment)
 SUFFIXES = (".nc", ".npz", ".csv")
-_ROTOR_UNITS = {"speed": "rad/s", "transverse_inertia": "kg m^2", "polar_inertia": "kg m^2", "mass": "kg"}
-
-
-def _column(name: str, part: str = "") -> str:
-    """A CSV or DataFrame column: the field, the part of a complex one, its unit (``k_N_per_m``, ``H_real_N_per_m``)."""
-    unit = UNITS[name].replace(" s", "s").replace("/", "_per_")
-    return "_".join(p for p in (name, part, unit) if p)
 
 
 def _fields(est: EstimateN) -> dict[str, np.ndarray]:
@@ -86,9 +80,9 @@ def _long(matrices: dict[str, np.ndarray], freq: np.ndarray, names: Any) -> dict
     columns["i"], columns["j"] = np.asarray(names)[columns["i"]], np.asarray(names)[columns["j"]]
     for name, values in matrices.items():
         if np.iscomplexobj(values):
-            columns[_column(name, "real")], columns[_column(name, "imag")] = values.real.ravel(), values.imag.ravel()
+            columns[column(name, "real")], columns[column(name, "imag")] = values.real.ravel(), values.imag.ravel()
         else:
-            columns[_column(name)] = values.ravel()
+            columns[column(name)] = values.ravel()
     return columns
 
 
@@ -131,10 +125,8 @@ def _build(freq: np.ndarray, arrays: dict[str, np.ndarray], periods: int, axes: 
 
 def estimate_from_dataset(ds: Any) -> EstimateN:  # noqa: ANN401 - an xarray Dataset
     """The estimate of a Dataset read by :func:`amb_fast.io.read_netcdf` from its ``.nc`` file."""
-    arrays = {name: np.asarray(ds[name].values) for name in MATRICES + AMPLITUDES if name in ds}
-    for name in MATRICES + AMPLITUDES:
-        if name not in arrays:
-            arrays[name] = complex_array(np.asarray(ds[f"{name}_real"].values), np.asarray(ds[f"{name}_imag"].values))
+    arrays = {name: np.asarray(ds[name].values) if name in ds else complex_variable(ds, name)
+              for name in MATRICES + AMPLITUDES}  # fmt: skip
     return _build(np.asarray(ds.freq.values), arrays, ds.attrs["periods"], json.loads(ds.attrs["axes"]))
 
 
@@ -144,8 +136,8 @@ def estimate_from_csv(text: str, name: str) -> EstimateN:
     N = len(meta["axes"])
     require(table.shape[0] % (N * N) == 0, f"{name} rows", table.shape[0], f"a multiple of {N * N} (N x N per line)")
     col = {c: table[:, k].reshape(-1, N, N) for k, c in enumerate(header)}
-    arrays = {n: col[_column(n)] if _column(n) in col else complex_array(col[_column(n, "real")],
-                                                                        col[_column(n, "imag")])
+    arrays = {n: col[column(n)] if column(n) in col else complex_array(col[column(n, "real")],
+                                                                        col[column(n, "imag")])
               for n in MATRICES + AMPLITUDES}  # fmt: skip
     return _build(col["freq_Hz"][:, 0, 0], arrays, meta["periods"], meta["axes"])
 

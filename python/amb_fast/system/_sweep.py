@@ -25,16 +25,19 @@ from .. import _core
 from .._equality import ArrayRecord
 from .._errors import UnstableLoopError
 from .._excitation import Multisine
+from .._experiment import run_options
 from .._linear import checked_poles, eigenvalues
 from .._params import PID, Rig
-from .._sweep import point_seeds, run_or_split, run_points, sweep_options
+from .._sweep import point_seeds, run_or_split, run_points
 from .._sweep_result import OVERFLOW, read_sweep_file, register_sweep_kind, sweep_grid, unit_of
 from .._validate import require, seed_value
-from ..io import RESULT_UNITS, complex_array, pandas_module, write_netcdf, write_npz, xarray_module
+from ..io import RESULT_UNITS, pandas_module, write_netcdf, write_npz, xarray_module
+from ..io._netcdf import split_complex
+from ..io._results import complex_variable
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
 from ._experiment import coefficients, core_args, experiment_forces, experiment_seeds, run_experiment, settle_for
 from ._model import System, loop_models
-from ._results import _ROTOR_UNITS, _long
+from ._results import _long
 
 _AXIS_FIELDS = tuple(f.name for f in fields(Rig) if f.name not in ("force_law", "substeps", "mass"))
 _GAINS = ("kp", "ki", "kd", "derivative_cutoff")
@@ -103,7 +106,9 @@ class SweepResultN(ArrayRecord):
         matrices = ("point", "freq", "out", "in")
         data = {name: (matrices, getattr(self, name), {"units": RESULT_UNITS[name]}) for name in _ESTIMATES}
         data |= {name: (("point",), getattr(self, name), {}) for name in ("stable", "seeds", "status")}
-        coords = {name: (("point",), values, {"units": _param_unit(name)}) for name, values in self.params.items()}
+        coords = {
+            name: (("point",), values, {"units": _param_unit(name, self.axes)}) for name, values in self.params.items()
+        }
         coords |= {"freq": (("freq",), self.freq, {"units": "Hz"}), "out": (("out",), names, {}),
                    "in": (("in",), names, {})}  # fmt: skip
         attrs = {"amb_fast_kind": _KIND, "params": json.dumps(list(self.params)), "axes": json.dumps(self.axes)}
@@ -124,11 +129,7 @@ class SweepResultN(ArrayRecord):
         path = Path(path)
         require(path.suffix.lower() in (".nc", ".npz"), "path", str(path), "a file name ending in .nc or .npz")
         if path.suffix.lower() == ".nc":
-            ds = self.to_xarray()
-            for part in ("real", "imag"):
-                ds[f"receptance_{part}"] = getattr(ds.receptance, part)
-                ds[f"receptance_{part}"].attrs = dict(ds.receptance.attrs)
-            write_netcdf(ds.drop_vars("receptance"), path)
+            write_netcdf(split_complex(self.to_xarray()), path)
         else:
             arrays = {f"param_{i}": values for i, values in enumerate(self.params.values())}
             arrays |= {name: getattr(self, name) for name in ("freq", "stable", "seeds", *_ESTIMATES)}
@@ -152,7 +153,7 @@ def _from_file(header: dict[str, Any], contents: Any) -> SweepResultN:  # noqa: 
     params = {name: get(f"param_{i}" if npz else name) for i, name in enumerate(listed["params"])}
     arrays = {name: get(name) for name in ("freq", "stable", "seeds", *_ESTIMATES[: None if npz else -1])}
     if not npz:
-        arrays["receptance"] = complex_array(get("receptance_real"), get("receptance_imag"))
+        arrays["receptance"] = complex_variable(contents, "receptance")
     arrays["stable"], arrays["seeds"] = arrays["stable"].astype(bool), arrays["seeds"].astype(np.uint64)
     return SweepResultN(params=params, axes=tuple(str(a) for a in listed["axes"]), **arrays)
 
@@ -160,9 +161,17 @@ def _from_file(header: dict[str, Any], contents: Any) -> SweepResultN:  # noqa: 
 register_sweep_kind(_KIND, _from_file)  # amb_fast.load_sweep reads these files too
 
 
-def _param_unit(path: str) -> str:
+#: Units of the numbers a path names beyond a Rig's and a PID's (:func:`unit_of`): a rotor's, a two-axis process's.
+_UNITS = {"speed": "rad/s", "transverse_inertia": "kg m^2", "polar_inertia": "kg m^2", "kxy": "N/m", "kyx": "N/m",
+          "cxy": "N s/m", "cyx": "N s/m", "sensor_angle": "rad"}  # fmt: skip
+
+
+def _param_unit(path: str, axes: tuple[str, ...]) -> str:
+    """The unit of the number at ``path`` (``A.x.amp_bandwidth``, ``x_amp_bandwidth``, ``cross_kp``, ``kxy``)."""
     field = path.rpartition(".")[2]
-    return _ROTOR_UNITS.get(field, "") if path == "speed" or path.startswith("rotor.") else unit_of(field)
+    for prefix in ("cross_", *(f"{axis}_" for axis in axes)):  # an off-diagonal gain; an axis' field (two axes)
+        field = field.removeprefix(prefix)
+    return _UNITS.get(field) or unit_of(field)
 
 
 def _with(part: Any, path: str, value: float, whole: str, expected: str) -> Any:
@@ -250,7 +259,7 @@ def sweep(
     """
     require(callable(getattr(rig, "mechanics", None)), "rig", type(rig).__name__, "a rig of N axes (TwoAxisRig, ...)")
     require(isinstance(excitation, Multisine), "excitation", type(excitation).__name__, "a Multisine")
-    options = sweep_options(periods, settle_periods, median_window, start)
+    options = run_options(periods, settle_periods, median_window, start)
     _, points = sweep_grid(dict(axes), grid)
     seeds = point_seeds(seed_value(seed), next(iter(points.values())).size)
     names = rig.mechanics().names
