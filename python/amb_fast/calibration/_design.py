@@ -20,7 +20,7 @@ from .._params import PID, Rig
 from .._sweep import RIG_FIELDS, point_model
 from .._sweep_result import unit_of
 from ..controllers import save_controller
-from ._problem import _actual, _check_controller, _check_rig, _names
+from ._problem import _actual, _check_controller, _check_rig, _jacobian, _names
 
 GAINS = ("kp", "ki", "kd")
 _GRID_POINTS = 1500  # sensitivity grid of the constraint during the search (the result is checked on 20000)
@@ -332,6 +332,34 @@ def design_controller(
     def peak(x: np.ndarray) -> float:
         return float(np.max(np.abs(sensitivity(*model(x), grid))))
 
+    def margins(x: np.ndarray, limit: float) -> np.ndarray:
+        # limit^2 |1 - L|^2 - 1 at each grid frequency, >= 0 where |S| <= limit: smooth in x (quadratic in
+        # PID gains), where the peak of |S| kinks each time its frequency moves past a grid point.
+        return (limit * np.abs(1.0 / sensitivity(*model(x), grid))) ** 2 - 1.0
+
+    def search(x: np.ndarray, limit: float | None, size: float) -> np.ndarray:
+        """SLSQP from x inside the box x +- size: the least squares, stable, and |S| <= limit at every grid
+        frequency (one smooth inequality each, its Jacobian by central differences: exact for a quadratic),
+        the limit lowered by 1e-9 so that SLSQP's tolerance cannot leave the result over it."""
+        constraints: list[dict[str, Any]] = [{"type": "ineq", "fun": lambda y: 1.0 - 1e-6 - radius(y)}]
+        if limit is not None:
+            below = limit * (1.0 - 1e-9)
+            constraints.append({"type": "ineq", "fun": lambda y: margins(y, below),
+                                "jac": lambda y: _jacobian(lambda v: margins(v, below), y, lower, upper, 1e-6)})  # fmt: skip
+        # The sum of squares over the largest eigenvalue of its Gauss-Newton Hessian at x: SLSQP's first
+        # Hessian (the identity) then overestimates the curvature, and its first step does not overshoot.
+        J = _jacobian(residuals, x, lower, upper, 1e-6)
+        scale = 1.0 / max(2.0 * float(np.linalg.eigvalsh(J.T @ J)[-1]), 1e-300)
+
+        def gradient(y: np.ndarray) -> np.ndarray:
+            return 2.0 * scale * _jacobian(residuals, y, lower, upper, 1e-6).T @ residuals(y)
+
+        box = list(zip(np.maximum(x - size, lower), np.minimum(x + size, upper)))
+        result = optimize.minimize(lambda y: scale * float(np.sum(residuals(y) ** 2)), x, method="SLSQP",
+                                   jac=gradient, bounds=box, constraints=constraints,
+                                   options={"maxiter": 200, "ftol": 1e-12})  # fmt: skip
+        return np.asarray(result.x, dtype=float)
+
     def feasible(x: np.ndarray) -> bool:
         if np.any(x > upper) or radius(x) >= 1.0 - 1e-9:
             return False
@@ -350,16 +378,30 @@ def design_controller(
             for _ in range(40):
                 mid = 0.5 * (lo + hi)
                 lo, hi = (mid, hi) if feasible(x0 + mid * (x_star - x0)) else (lo, mid)
-            x_best = x0 + lo * (x_star - x0)
-            constraints = [{"type": "ineq", "fun": lambda x: 1.0 - 1e-6 - radius(x)}]
-            if max_sensitivity is not None:
-                constraints.append({"type": "ineq", "fun": lambda x: max_sensitivity - peak(x)})
-            box = [(None if np.isinf(a) else a, None if np.isinf(b) else b) for a, b in zip(lower, upper)]
-            result = optimize.minimize(lambda x: float(np.sum(residuals(x) ** 2)), x_best, method="SLSQP",
-                                       bounds=box, constraints=constraints,
-                                       options={"maxiter": 200, "ftol": 1e-12})  # fmt: skip
-            if np.all(np.isfinite(result.x)) and feasible(result.x) and objective(result.x) < objective(x_best):
-                x_best = result.x
+            x_line = x_best = x0 + lo * (x_star - x0)
+            # SLSQP inside a box around its start (a trust region) that grows while its results are stable
+            # and within the limit and shrinks when not: SLSQP lets its iterates leave the constraints, and
+            # from a long step it can land beyond the ridge of |S| in an unstable region where |S| is small
+            # again (small gains: |S| near 1). The search's grid misses the peak between its points: the
+            # limit is tightened by the miss that stability_margin's grid finds, and the search repeated.
+            limit, size, bar = max_sensitivity, 0.5, objective(x_line)
+            for _ in range(12):
+                x = search(x_best, limit, size)
+                if not (np.all(np.isfinite(x)) and feasible(x) and objective(x) <= bar):
+                    size /= 4
+                    if size < 1e-3:
+                        break
+                    continue
+                inside = bool(np.all(np.abs(x - x_best) < 0.999 * size))
+                x_best, bar = x, objective(x)
+                checked = stability_margin(*model(x)).peak
+                if max_sensitivity is not None and limit is not None and checked > max_sensitivity:
+                    limit *= max_sensitivity / checked
+                    bar = objective(x_line)
+                elif inside:
+                    break
+                else:
+                    size *= 2
         else:
             x_best = x0
 
