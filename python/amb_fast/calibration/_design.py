@@ -344,8 +344,14 @@ def design_controller(
         constraints: list[dict[str, Any]] = [{"type": "ineq", "fun": lambda y: 1.0 - 1e-6 - radius(y)}]
         if limit is not None:
             below = limit * (1.0 - 1e-9)
-            constraints.append({"type": "ineq", "fun": lambda y: margins(y, below),
-                                "jac": lambda y: _jacobian(lambda v: margins(v, below), y, lower, upper, 1e-6)})  # fmt: skip
+
+            def within(y: np.ndarray) -> np.ndarray:
+                return margins(y, below)
+
+            def slopes(y: np.ndarray) -> np.ndarray:
+                return _jacobian(within, y, lower, upper, 1e-6)
+
+            constraints.append({"type": "ineq", "fun": within, "jac": slopes})
         # The sum of squares over the largest eigenvalue of its Gauss-Newton Hessian at x: SLSQP's first
         # Hessian (the identity) then overestimates the curvature, and its first step does not overshoot.
         J = _jacobian(residuals, x, lower, upper, 1e-6)
