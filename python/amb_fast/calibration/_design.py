@@ -332,33 +332,40 @@ def design_controller(
     def peak(x: np.ndarray) -> float:
         return float(np.max(np.abs(sensitivity(*model(x), grid))))
 
-    def margins(x: np.ndarray, limit: float) -> np.ndarray:
-        # limit^2 |1 - L|^2 - 1 at each grid frequency, >= 0 where |S| <= limit: smooth in x (quadratic in
-        # PID gains), where the peak of |S| kinks each time its frequency moves past a grid point.
-        return (limit * np.abs(1.0 / sensitivity(*model(x), grid))) ** 2 - 1.0
+    def loop(x: np.ndarray) -> np.ndarray:
+        return 1.0 / sensitivity(*model(x), grid)  # 1 - L on the grid
+
+    def slopes(x: np.ndarray) -> np.ndarray:
+        # With the loop affine in x (PID gains), the constant M; else central differences.
+        return M if exact else _jacobian(residuals, x, lower, upper, 1e-6)
 
     def search(x: np.ndarray, limit: float | None, size: float) -> np.ndarray:
         """SLSQP from x inside the box x +- size: the least squares, stable, and |S| <= limit at every grid
-        frequency (one smooth inequality each, its Jacobian by central differences: exact for a quadratic),
-        the limit lowered by 1e-9 so that SLSQP's tolerance cannot leave the result over it."""
+        frequency as one inequality each, ``limit^2 |1 - L|^2 - 1 >= 0``: smooth in x (quadratic in PID
+        gains), where the peak of |S| kinks each time its frequency moves past a grid point. The limit is
+        lowered by 1e-9 so that SLSQP's tolerance cannot leave the result over it."""
         constraints: list[dict[str, Any]] = [{"type": "ineq", "fun": lambda y: 1.0 - 1e-6 - radius(y)}]
         if limit is not None:
-            below = limit * (1.0 - 1e-9)
+            square = (limit * (1.0 - 1e-9)) ** 2
+            # d(1 - L)/dx: unit steps when the loop is affine in x, else central differences at each point.
+            unit = np.column_stack([loop(x + e) - loop(x) for e in np.eye(x.size)]) if exact else None
 
-            def within(y: np.ndarray) -> np.ndarray:
-                return margins(y, below)
+            def margins(y: np.ndarray) -> np.ndarray:
+                return square * np.abs(loop(y)) ** 2 - 1.0
 
-            def slopes(y: np.ndarray) -> np.ndarray:
-                return _jacobian(within, y, lower, upper, 1e-6)
+            def margin_slopes(y: np.ndarray) -> np.ndarray:
+                if unit is None:
+                    return _jacobian(margins, y, lower, upper, 1e-6)
+                return 2.0 * square * (np.conj(loop(y))[:, None] * unit).real
 
-            constraints.append({"type": "ineq", "fun": within, "jac": slopes})
+            constraints.append({"type": "ineq", "fun": margins, "jac": margin_slopes})
         # The sum of squares over the largest eigenvalue of its Gauss-Newton Hessian at x: SLSQP's first
         # Hessian (the identity) then overestimates the curvature, and its first step does not overshoot.
-        J = _jacobian(residuals, x, lower, upper, 1e-6)
+        J = slopes(x)
         scale = 1.0 / max(2.0 * float(np.linalg.eigvalsh(J.T @ J)[-1]), 1e-300)
 
         def gradient(y: np.ndarray) -> np.ndarray:
-            return 2.0 * scale * _jacobian(residuals, y, lower, upper, 1e-6).T @ residuals(y)
+            return 2.0 * scale * slopes(y).T @ residuals(y)
 
         box = list(zip(np.maximum(x - size, lower), np.minimum(x + size, upper)))
         result = optimize.minimize(lambda y: scale * float(np.sum(residuals(y) ** 2)), x, method="SLSQP",
@@ -380,8 +387,10 @@ def design_controller(
             # the start (the peak minimised); without one, the design of lowest peak, said so.
             x0, found = _feasible_start(x0, x_star, radius, peak, max_sensitivity, lower, upper)
         if found:
-            lo, hi = 0.0, 1.0  # the furthest feasible point on the segment from the start to the optimum
-            for _ in range(40):
+            # SLSQP's start: the furthest feasible point on the segment from the start to the optimum, to 1e-6
+            # of its length (SLSQP's constraints do the rest).
+            lo, hi = 0.0, 1.0
+            for _ in range(20):
                 mid = 0.5 * (lo + hi)
                 lo, hi = (mid, hi) if feasible(x0 + mid * (x_star - x0)) else (lo, mid)
             x_line = x_best = x0 + lo * (x_star - x0)
