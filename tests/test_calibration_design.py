@@ -63,8 +63,8 @@ def test_a_limited_design_is_the_optimum_on_the_limit(
 
 
 def test_three_free_gains_do_not_depend_on_rounding() -> None:
-    # Before: kp, ki, kd = 2260.1, 20532, 5.217 (objective 0.18471 but peak 2.30006, over the limit) with the first mass and
-    # 2271.8, 41292, 5.586 (objective 0.2002) with the second, 1e-15 away.
+    # Before: kp, ki, kd = 2260.1, 20532, 5.217 (objective 0.18471 but peak 2.30006, over the limit) with
+    # the first mass and 2271.8, 41292, 5.586 (objective 0.2002) with the second, 1e-15 away.
     designs = []
     for seed in (0, 3):
         mass = af.Rig.paper().mass * (1 + 1e-15 * np.random.default_rng(seed).standard_normal())
