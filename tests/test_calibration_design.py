@@ -75,3 +75,13 @@ def test_three_free_gains_do_not_depend_on_rounding() -> None:
     for d in designs[1:]:
         assert d.params == pytest.approx(designs[0].params, rel=1e-6)
         assert d.residual == pytest.approx(designs[0].residual, rel=1e-9)
+
+
+def test_a_free_block_frequency_may_start_near_nyquist() -> None:
+    # Before: ValueError "freq must be below the Nyquist frequency 2000.0 Hz, got 4077.4": the test of
+    # whether the misses are affine in the parameters stepped ln(low_pass_freq) by 1, to 1500 e Hz.
+    start = af.PID.paper() * af.low_pass(1500.0, order=2)
+    d = af.design_controller(af.Rig.paper(), start, freq=BAND, stiffness=6e4, damping=150.0,
+                             free=["kp", "kd", "low_pass_freq"])  # fmt: skip
+    assert not d.exact and d.stable
+    assert 0 < d.params["low_pass_freq"] < 2000.0

@@ -312,14 +312,16 @@ def design_controller(
     def objective(x: np.ndarray) -> float:
         return _rms(residuals(x))
 
-    # Unconstrained optimum: exact when the residuals are affine in x (checked at two other points).
+    # Unconstrained optimum: exact when the residuals are affine in x (checked at two other points). Only
+    # linear coordinates are probed: a unit step of a log one (a factor e) can put a block's frequency
+    # past Nyquist.
     r0 = residuals(x0)
-    M = np.column_stack([residuals(x0 + np.eye(len(names))[j]) - r0 for j in range(len(names))])
+    M = np.column_stack([residuals(x0 + e) - r0 for e in np.eye(len(names))]) if not logs.any() else None
     probe = x0 + np.linspace(0.3, -0.2, len(names))
-    exact = not logs.any() and bool(
+    exact = M is not None and bool(
         np.linalg.norm(residuals(probe) - (r0 + M @ (probe - x0))) <= 1e-8 * (np.linalg.norm(r0) + np.linalg.norm(M))
     )
-    if exact:
+    if M is not None and exact:
         x_star = x0 + np.linalg.lstsq(M, -r0, rcond=None)[0]
     else:
         x_star = optimize.least_squares(residuals, x0, method="trf", bounds=(lower, upper), xtol=1e-12, ftol=1e-12).x
@@ -337,7 +339,7 @@ def design_controller(
 
     def slopes(x: np.ndarray) -> np.ndarray:
         # With the loop affine in x (PID gains), the constant M; else central differences.
-        return M if exact else _jacobian(residuals, x, lower, upper, 1e-6)
+        return M if M is not None and exact else _jacobian(residuals, x, lower, upper, 1e-6)
 
     def search(x: np.ndarray, limit: float | None, size: float) -> np.ndarray:
         """SLSQP from x inside the box x +- size: the least squares, stable, and |S| <= limit at every grid
@@ -399,9 +401,9 @@ def design_controller(
             # from a long step it can land beyond the ridge of |S| in an unstable region where |S| is small
             # again (small gains: |S| near 1). The search's grid misses the peak between its points: the
             # limit is tightened by the miss that stability_margin's grid finds, and the search repeated.
-            limit, size, bar = max_sensitivity, 0.5, objective(x_line)
+            tightened, size, bar = max_sensitivity, 0.5, objective(x_line)
             for _ in range(12):
-                x = search(x_best, limit, size)
+                x = search(x_best, tightened, size)
                 if not (np.all(np.isfinite(x)) and feasible(x) and objective(x) <= bar):
                     size /= 4
                     if size < 1e-3:
@@ -410,8 +412,8 @@ def design_controller(
                 inside = bool(np.all(np.abs(x - x_best) < 0.999 * size))
                 x_best, bar = x, objective(x)
                 checked = stability_margin(*model(x)).peak
-                if max_sensitivity is not None and limit is not None and checked > max_sensitivity:
-                    limit *= max_sensitivity / checked
+                if max_sensitivity is not None and tightened is not None and checked > max_sensitivity:
+                    tightened *= max_sensitivity / checked
                     bar = objective(x_line)
                 elif inside:
                     break
