@@ -247,9 +247,13 @@ def design_controller(
     transfer function, so k and c are affine in the PID gains. With only gains free the unconstrained
     optimum is an exact linear least-squares solve (verified affine numerically); otherwise trust-region
     least squares from the start values (positive non-gain parameters in log scale). If the optimum is
-    unstable or over ``max_sensitivity``, the design moves from the start controller (which must be
-    feasible) towards it as far as the limits allow, then minimises with the limits as constraints
-    (SLSQP): the best feasible design, and the report says by how much it misses.
+    unstable or over ``max_sensitivity``, the design moves from the start controller (made feasible
+    first if it is not) towards it as far as the limits allow, then minimises with the limits as
+    constraints (SLSQP in a box around its start that grows while its results are feasible): the best
+    feasible design, and the report says by how much it misses. The sensitivity limit is one smooth
+    inequality per frequency of a 1500-point grid, ``max_sensitivity^2 |1 - L|^2 >= 1`` (the peak itself
+    kinks as its frequency moves between grid points, and SLSQP then fails to converge), tightened by
+    what the grid misses of the peak on :func:`amb_fast.stability_margin`'s 20000 points.
     """
     _check_rig(rig)
     _check_controller(controller, "controller")
