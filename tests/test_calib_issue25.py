@@ -124,17 +124,32 @@ def test_cli_fit_controller_file_that_contradicts_a_file(saved: tuple[Path, Path
 
 
 # ---------------------------------------------------------------------------------------- case 10: design
-def test_design_below_the_start_s_sensitivity_peak_finds_a_feasible_start() -> None:
+def test_design_below_the_start_s_sensitivity_peak_finds_a_feasible_start(monkeypatch: pytest.MonkeyPatch) -> None:
+    from amb_fast.calibration import _design
+
+    calls = []  # sensitivity evaluations of the search
+    monkeypatch.setattr(_design, "sensitivity", lambda *a, **k: calls.append(1) or af.sensitivity(*a, **k))
     start = af.PID.paper()
     assert af.stability_margin(af.Rig.paper(), start).peak == pytest.approx(4.84, abs=0.01)
-    d = af.design_controller(af.Rig.paper(), start, freq=BAND, stiffness=6e4, damping=150.0, max_sensitivity=2.3)
-    assert d.feasible and d.stable and d.constrained
-    assert d.peak_sensitivity <= 2.3 * (1 + 1e-3)
-    assert d.start_peak == pytest.approx(4.84, abs=0.01)
-    assert np.isfinite(d.k_miss) and np.isfinite(d.c_miss)
-    text = d.report()
-    assert re.search(r"start controller's sensitivity peak 4\.8\d+ is over the limit", text)
-    assert "best feasible design" in text
+    # Before: 203 to 2,615 sensitivity evaluations (0.3-6 s) as the rig's mass changed at 1e-15, SLSQP never
+    # converging on the peak's kinks. The same design, in a bounded work, for each of these masses.
+    designs = []
+    for seed in (0, 1, 2):
+        mass = af.Rig.paper().mass * (1 + 1e-15 * np.random.default_rng(seed).standard_normal())
+        calls.clear()
+        d = af.design_controller(replace(af.Rig.paper(), mass=mass), start, freq=BAND, stiffness=6e4, damping=150.0,
+                                 max_sensitivity=2.3)  # fmt: skip
+        assert len(calls) <= 300
+        assert d.feasible and d.stable and d.constrained
+        assert d.peak_sensitivity <= 2.3
+        assert d.start_peak == pytest.approx(4.84, abs=0.01)
+        assert np.isfinite(d.k_miss) and np.isfinite(d.c_miss)
+        text = d.report()
+        assert re.search(r"start controller's sensitivity peak 4\.8\d+ is over the limit", text)
+        assert "best feasible design" in text
+        designs.append(d)
+    for d in designs[1:]:
+        assert d.params == pytest.approx(designs[0].params, rel=1e-6)
 
 
 def test_design_with_no_feasible_point_says_so_with_the_best_peak() -> None:

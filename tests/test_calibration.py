@@ -195,7 +195,7 @@ def test_design_respects_the_sensitivity_limit() -> None:
     assert free_design.peak_sensitivity > 3.0
     limited = design_controller(rig, start, freq=f, stiffness=8e4, damping=20.0, max_sensitivity=3.0)
     assert limited.constrained and limited.stable
-    assert limited.peak_sensitivity <= 3.0 * 1.001
+    assert limited.peak_sensitivity <= 3.0  # before: 3.00011, the search grid missing the peak
     assert limited.residual >= free_design.residual
     assert "not feasible" in limited.report()
 

@@ -20,7 +20,7 @@ from .._params import PID, Rig
 from .._sweep import RIG_FIELDS, point_model
 from .._sweep_result import unit_of
 from ..controllers import save_controller
-from ._problem import _actual, _check_controller, _check_rig, _names
+from ._problem import _actual, _check_controller, _check_rig, _jacobian, _names
 
 GAINS = ("kp", "ki", "kd")
 _GRID_POINTS = 1500  # sensitivity grid of the constraint during the search (the result is checked on 20000)
@@ -247,9 +247,13 @@ def design_controller(
     transfer function, so k and c are affine in the PID gains. With only gains free the unconstrained
     optimum is an exact linear least-squares solve (verified affine numerically); otherwise trust-region
     least squares from the start values (positive non-gain parameters in log scale). If the optimum is
-    unstable or over ``max_sensitivity``, the design moves from the start controller (which must be
-    feasible) towards it as far as the limits allow, then minimises with the limits as constraints
-    (SLSQP): the best feasible design, and the report says by how much it misses.
+    unstable or over ``max_sensitivity``, the design moves from the start controller (made feasible
+    first if it is not) towards it as far as the limits allow, then minimises with the limits as
+    constraints (SLSQP in a box around its start that grows while its results are feasible): the best
+    feasible design, and the report says by how much it misses. The sensitivity limit is one smooth
+    inequality per frequency of a 1500-point grid, ``max_sensitivity^2 |1 - L|^2 >= 1`` (the peak itself
+    kinks as its frequency moves between grid points, and SLSQP then fails to converge), tightened by
+    what the grid misses of the peak on :func:`amb_fast.stability_margin`'s 20000 points.
     """
     _check_rig(rig)
     _check_controller(controller, "controller")
@@ -312,14 +316,16 @@ def design_controller(
     def objective(x: np.ndarray) -> float:
         return _rms(residuals(x))
 
-    # Unconstrained optimum: exact when the residuals are affine in x (checked at two other points).
+    # Unconstrained optimum: exact when the residuals are affine in x (checked at two other points). Only
+    # linear coordinates are probed: a unit step of a log one (a factor e) can put a block's frequency
+    # past Nyquist.
     r0 = residuals(x0)
-    M = np.column_stack([residuals(x0 + np.eye(len(names))[j]) - r0 for j in range(len(names))])
+    M = np.column_stack([residuals(x0 + e) - r0 for e in np.eye(len(names))]) if not logs.any() else None
     probe = x0 + np.linspace(0.3, -0.2, len(names))
-    exact = not logs.any() and bool(
+    exact = M is not None and bool(
         np.linalg.norm(residuals(probe) - (r0 + M @ (probe - x0))) <= 1e-8 * (np.linalg.norm(r0) + np.linalg.norm(M))
     )
-    if exact:
+    if M is not None and exact:
         x_star = x0 + np.linalg.lstsq(M, -r0, rcond=None)[0]
     else:
         x_star = optimize.least_squares(residuals, x0, method="trf", bounds=(lower, upper), xtol=1e-12, ftol=1e-12).x
@@ -331,6 +337,47 @@ def design_controller(
 
     def peak(x: np.ndarray) -> float:
         return float(np.max(np.abs(sensitivity(*model(x), grid))))
+
+    def loop(x: np.ndarray) -> np.ndarray:
+        return 1.0 / sensitivity(*model(x), grid)  # 1 - L on the grid
+
+    def slopes(x: np.ndarray) -> np.ndarray:
+        # With the loop affine in x (PID gains), the constant M; else central differences.
+        return M if M is not None and exact else _jacobian(residuals, x, lower, upper, 1e-6)
+
+    def search(x: np.ndarray, limit: float | None, size: float) -> np.ndarray:
+        """SLSQP from x inside the box x +- size: the least squares, stable, and |S| <= limit at every grid
+        frequency as one inequality each, ``limit^2 |1 - L|^2 - 1 >= 0``: smooth in x (quadratic in PID
+        gains), where the peak of |S| kinks each time its frequency moves past a grid point. The limit is
+        lowered by 1e-9 so that SLSQP's tolerance cannot leave the result over it."""
+        constraints: list[dict[str, Any]] = [{"type": "ineq", "fun": lambda y: 1.0 - 1e-6 - radius(y)}]
+        if limit is not None:
+            square = (limit * (1.0 - 1e-9)) ** 2
+            # d(1 - L)/dx: unit steps when the loop is affine in x, else central differences at each point.
+            unit = np.column_stack([loop(x + e) - loop(x) for e in np.eye(x.size)]) if exact else None
+
+            def margins(y: np.ndarray) -> np.ndarray:
+                return square * np.abs(loop(y)) ** 2 - 1.0
+
+            def margin_slopes(y: np.ndarray) -> np.ndarray:
+                if unit is None:
+                    return _jacobian(margins, y, lower, upper, 1e-6)
+                return 2.0 * square * (np.conj(loop(y))[:, None] * unit).real
+
+            constraints.append({"type": "ineq", "fun": margins, "jac": margin_slopes})
+        # The sum of squares over the largest eigenvalue of its Gauss-Newton Hessian at x: SLSQP's first
+        # Hessian (the identity) then overestimates the curvature, and its first step does not overshoot.
+        J = slopes(x)
+        scale = 1.0 / max(2.0 * float(np.linalg.eigvalsh(J.T @ J)[-1]), 1e-300)
+
+        def gradient(y: np.ndarray) -> np.ndarray:
+            return 2.0 * scale * slopes(y).T @ residuals(y)
+
+        box = list(zip(np.maximum(x - size, lower), np.minimum(x + size, upper)))
+        result = optimize.minimize(lambda y: scale * float(np.sum(residuals(y) ** 2)), x, method="SLSQP",
+                                   jac=gradient, bounds=box, constraints=constraints,
+                                   options={"maxiter": 200, "ftol": 1e-12})  # fmt: skip
+        return np.asarray(result.x, dtype=float)
 
     def feasible(x: np.ndarray) -> bool:
         if np.any(x > upper) or radius(x) >= 1.0 - 1e-9:
@@ -346,20 +393,36 @@ def design_controller(
             # the start (the peak minimised); without one, the design of lowest peak, said so.
             x0, found = _feasible_start(x0, x_star, radius, peak, max_sensitivity, lower, upper)
         if found:
-            lo, hi = 0.0, 1.0  # the furthest feasible point on the segment from the start to the optimum
-            for _ in range(40):
+            # SLSQP's start: the furthest feasible point on the segment from the start to the optimum, to 1e-6
+            # of its length (SLSQP's constraints do the rest).
+            lo, hi = 0.0, 1.0
+            for _ in range(20):
                 mid = 0.5 * (lo + hi)
                 lo, hi = (mid, hi) if feasible(x0 + mid * (x_star - x0)) else (lo, mid)
-            x_best = x0 + lo * (x_star - x0)
-            constraints = [{"type": "ineq", "fun": lambda x: 1.0 - 1e-6 - radius(x)}]
-            if max_sensitivity is not None:
-                constraints.append({"type": "ineq", "fun": lambda x: max_sensitivity - peak(x)})
-            box = [(None if np.isinf(a) else a, None if np.isinf(b) else b) for a, b in zip(lower, upper)]
-            result = optimize.minimize(lambda x: float(np.sum(residuals(x) ** 2)), x_best, method="SLSQP",
-                                       bounds=box, constraints=constraints,
-                                       options={"maxiter": 200, "ftol": 1e-12})  # fmt: skip
-            if np.all(np.isfinite(result.x)) and feasible(result.x) and objective(result.x) < objective(x_best):
-                x_best = result.x
+            x_line = x_best = x0 + lo * (x_star - x0)
+            # SLSQP inside a box around its start (a trust region) that grows while its results are stable
+            # and within the limit and shrinks when not: SLSQP lets its iterates leave the constraints, and
+            # from a long step it can land beyond the ridge of |S| in an unstable region where |S| is small
+            # again (small gains: |S| near 1). The search's grid misses the peak between its points: the
+            # limit is tightened by the miss that stability_margin's grid finds, and the search repeated.
+            tightened, size, bar = max_sensitivity, 0.5, objective(x_line)
+            for _ in range(12):
+                x = search(x_best, tightened, size)
+                if not (np.all(np.isfinite(x)) and feasible(x) and objective(x) <= bar):
+                    size /= 4
+                    if size < 1e-3:
+                        break
+                    continue
+                inside = bool(np.all(np.abs(x - x_best) < 0.999 * size))
+                x_best, bar = x, objective(x)
+                checked = stability_margin(*model(x)).peak
+                if max_sensitivity is not None and tightened is not None and checked > max_sensitivity:
+                    tightened *= max_sensitivity / checked
+                    bar = objective(x_line)
+                elif inside:
+                    break
+                else:
+                    size *= 2
         else:
             x_best = x0
 
