@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from .._experiment import actual_coefficients
 from .._linear import controller_matrices, is_controller, plant_responses, predict, state_response, transducer_response
 from .._params import Rig
 from ..controllers import as_controller
@@ -79,9 +80,7 @@ def _names(free: Any) -> Any:
 def _actual(rig: Rig, controller: Any, freq: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Actual stiffness k (N/m) and damping c (N s/m) at ``freq`` (Hz), as an estimate computes them from
     :func:`amb_fast.predict`: ``k = rig.mass w^2 + Re F/Y``, ``c = Im F/Y / w``."""
-    w = 2 * np.pi * np.asarray(freq, dtype=float)
-    H = 1.0 / predict(rig, controller, freq)
-    return rig.mass * w**2 + H.real, H.imag / w
+    return actual_coefficients(1.0 / predict(rig, controller, freq), np.asarray(freq, dtype=float), rig.mass)
 
 
 def _jacobian(
