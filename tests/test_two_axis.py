@@ -254,9 +254,7 @@ def test_plot_and_command_helpers(capsys, tmp_path) -> None:
     assert out.k.shape == (sphs.freq.size, 2, 2)
     printed = capsys.readouterr().out
     assert "kxy (N/m)" in printed and "singular value" in printed
-    table = np.genfromtxt(args.save, delimiter=",", names=True)
-    np.testing.assert_allclose(table["kxy_N_per_m"], out.k[:, 0, 1], rtol=1e-9)
-    np.testing.assert_allclose(table["cyx_std_Ns_per_m"], out.c_std[:, 1, 0], rtol=1e-9)
+    assert af.load_estimate(args.save) == out  # the N-axis estimate's own file (was a wide table it could not read)
     assert args.figure.stat().st_size > 0
 
 

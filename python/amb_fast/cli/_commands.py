@@ -19,6 +19,7 @@ from .._validate import integer, real
 from ..claims import natural_frequency
 from ..io import load_recording
 from ..two_axis import run_two_axis
+from ..two_axis._command import two_axis_model
 from ._options import (
     ESTIMATE_SUFFIXES,
     FIGURE_SUFFIXES,
@@ -86,6 +87,10 @@ def cmd_run(args: argparse.Namespace) -> None:
     for name, unit in cross.items():  # here, not in the run: a NaN is an input mistake, named by its option
         real("--" + name.replace("_", "-"), getattr(args, name), unit)
     if args.two_axis:
+        if rig.force_law != "linear":  # the library names x.force_law; this is the rig of the options
+            raise UsageError(f"--two-axis models the linear force law only; the rig's is {rig.force_law!r} "
+                             "(--force-law or --rig)")  # fmt: skip
+        two_axis_model(args, rig, pid)  # an unstable loop is a mistake in the options, as with one axis
         _started(args)
         run_two_axis(args, rig, pid, excitation)
         return

@@ -60,7 +60,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 ESTIMATE_SUFFIXES = (".csv", ".nc")
-TWO_AXIS_SUFFIXES = (".csv", ".npz")  # amb-fast run --two-axis --save
+TWO_AXIS_SUFFIXES = (".csv", ".nc", ".npz")  # amb-fast run --two-axis --save: EstimateN.save's
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 SWEEP_SUFFIXES = (".nc", ".npz", ".csv")
 

@@ -1,0 +1,145 @@
+"""Every file the command writes loads back with the library; input mistakes that only the library used to
+catch (after the run had started: exit status 1) are refused before any work, exit status 2, in one line
+naming the option."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import amb_fast as af
+from amb_fast import cli
+from amb_fast import two_axis as ta
+from cli_helpers import one_error_line, run
+
+# -- every output loads back ----------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".nc", ".npz"])
+def test_run_two_axis_saves_the_n_axis_estimate_that_load_estimate_reads(capsys, tmp_path, suffix) -> None:
+    """Was: ``save_estimate2``'s wide table (freq_Hz, kxx_N_per_m, ...): load_estimate refused the .npz and
+    could not read the .csv; .nc was refused by the command."""
+    if suffix == ".nc":
+        pytest.importorskip("h5netcdf")
+    path = tmp_path / f"two{suffix}"
+    status, out, err = run(capsys, "run", "--two-axis", "--kxy=1e4", "--f-max", "20", "--periods", "2", "--seed",
+                           "3", "--save", str(path))  # fmt: skip
+    assert status == 0, err
+    assert f"wrote {path}" in out
+    rig = ta.TwoAxisRig(x=af.Rig.paper(), y=af.Rig.paper(), kxy=1e4)
+    pid = af.PID.paper()
+    expected = ta.run_experiment(rig, [[pid, None], [None, pid]], af.schroeder_multisine(f_max=20.0), periods=2,
+                                 seed=3)  # fmt: skip
+    assert af.load_estimate(path) == expected
+
+
+@pytest.mark.parametrize(
+    ("args", "name", "load"),
+    [
+        (["run", "--save"], "e.csv", af.load_estimate),
+        (["run", "--save"], "e.nc", af.load_estimate),
+        (["rotor", "experiment", "--save"], "r.csv", af.load_estimate),
+        (["rotor", "experiment", "--save"], "r.nc", af.load_estimate),
+        (["rotor", "experiment", "--save"], "r.npz", af.load_estimate),
+        (["sweep", "--kp", "2000,2400", "--no-progress", "--out"], "s.nc", af.load_sweep),
+        (["sweep", "--kp", "2000,2400", "--no-progress", "--out"], "s.npz", af.load_sweep),
+    ],
+)  # fmt: skip
+def test_every_saved_result_loads_back_with_the_library(capsys, tmp_path, args, name, load) -> None:
+    if name.endswith(".nc"):
+        pytest.importorskip("h5netcdf")
+        pytest.importorskip("xarray")
+    path = tmp_path / name
+    status, _, err = run(capsys, *args, str(path), "--periods", "2", "--seed", "5")
+    assert status == 0, err
+    loaded = load(path)
+    assert loaded.freq.size > 0 and np.all(np.isfinite(loaded.k))
+
+
+def test_fit_and_design_files_load_back(capsys, tmp_path) -> None:
+    estimate = tmp_path / "e.csv"
+    assert run(capsys, "run", "--periods", "4", "--f-max", "50", "--save", str(estimate))[0] == 0
+    status, _, err = run(capsys, "fit", str(estimate), "--free", "kyy,kiy", "--out", str(tmp_path / "rig.toml"))
+    assert status == 0, err
+    assert af.load_rig(tmp_path / "rig.toml").kiy > 0
+    status, _, err = run(capsys, "design", "--stiffness", "6e4", "--out", str(tmp_path / "c.toml"))
+    assert status == 0, err
+    assert af.load_controller(tmp_path / "c.toml").fs == 4000.0
+
+
+# -- design and fit: input mistakes before the work -----------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (["--stiffness", "6e4", "--max-sensitivity", "-1"],
+         "--max-sensitivity must be a finite |S| peak > 1 (3: ISO 14839-3 zone A), got -1"),
+        (["--stiffness", "6e4", "--max-sensitivity", "nan"], "--max-sensitivity must be a finite |S| peak > 1"),
+        (["--stiffness", "nan"], "--stiffness must be a finite number (N/m), got nan"),
+        (["--damping", "inf"], "--damping must be a finite number (N s/m), got inf"),
+        (["--stiffness", "6e4", "--free", "kq"],
+         "--free: 'kq' is not a parameter of the controller; one of kp, ki, kd, derivative_cutoff"),
+        (["--stiffness", "6e4", "--free", "kp,kp"], "--free must name one or more distinct parameters, got 'kp,kp'"),
+        (["--stiffness", "6e4", "--free", "kyy"], "--free: 'kyy' is a rig field; design chooses controller parameters"),
+    ],
+)  # fmt: skip
+def test_design_mistakes_the_library_found_after_the_start_are_exit_status_2(capsys, options, message) -> None:
+    """Were exit status 1 (a failed run), and ``--free kq`` was named ``free:``."""
+    status, _, err = run(capsys, "design", *options)
+    assert status == 2 and message in one_error_line(err)
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (["--stiffness", "6e4", "--step", "nan"], "--step must be a finite number > 0 (Hz), got nan"),
+        (["--stiffness", "6e4", "--step", "1e-9"], "--step 1e-09 gives 1.3e+11 frequencies in 20:150 Hz"),
+        (["--stiffness", "6e4", "--band", "20:inf"], "--band must be finite frequencies 0 < low < high (Hz), got "
+         "20:inf"),
+        (["--stiffness", "6e4", "--kp", "nan"], "--kp must be a finite number (A/m), got nan"),
+        (["--stiffness", "6e4", "--set", "mass=nan"], "--set: mass must be a finite number > 0 (kg), got nan"),
+        (["--stiffness", "6e4", "--set", "substeps=2.5"], "--set substeps must be a whole number >= 1, got 2.5"),
+    ],
+)  # fmt: skip
+def test_design_messages_name_the_option(capsys, options, message) -> None:
+    """Were "arange: cannot compute length", "Maximum allowed size exceeded", "kp must ...", "mass must ..."; and
+    ``--set substeps=2.5`` ran with 2 substeps."""
+    status, _, err = run(capsys, "design", *options)
+    assert status == 2 and message in one_error_line(err)
+
+
+@pytest.fixture(scope="module")
+def estimates(tmp_path_factory) -> dict[str, str]:
+    """Estimate files: ``plain`` (4 periods), ``noiseless`` (no noise: no weights), ``three`` (3 periods),
+    ``slow`` (fs 2000 Hz)."""
+    folder = tmp_path_factory.mktemp("estimates")
+    options = {"plain": [], "noiseless": ["--sensor-noise", "0", "--force-noise", "0"], "slow": ["--fs", "2000"]}
+    paths = {}
+    for name, extra in options.items():
+        paths[name] = str(folder / f"{name}.csv")
+        assert cli.main(["run", "--periods", "4", "--f-max", "50", "--save", paths[name], *extra]) == 0
+    paths["three"] = str(folder / "three.csv")
+    assert cli.main(["run", "--periods", "3", "--f-max", "50", "--save", paths["three"]]) == 0
+    return paths
+
+
+@pytest.mark.parametrize(
+    ("files", "options", "message"),
+    [
+        (["plain"], ["--free", "kq"], "--free: 'kq' is not a rig field the fit can choose; one of mass, kyy"),
+        (["plain"], ["--free", "kyy,kyy"], "--free must name one or more distinct parameters, got 'kyy,kyy'"),
+        (["plain"], ["--free", "sensor_bandwidth", "--set", "sensor_bandwidth=none"],
+         "--free sensor_bandwidth: the rig's sensor_bandwidth is 'none' (its stage is off), so the fit has no start "
+         "value; give one with --set sensor_bandwidth=X"),
+        (["noiseless"], [], "noiseless.csv' has standard errors k_std, c_std that are not all finite and > 0"),
+        (["three"], [], "three.csv' averages 3 periods; a fit needs >= 4"),
+        (["plain", "slow"], [], "the estimates' controllers run at different fs [2000.0, 4000.0] Hz"),
+    ],
+)  # fmt: skip
+def test_fit_mistakes_the_library_found_after_the_start_are_exit_status_2(capsys, estimates, files, options,
+                                                                          message) -> None:  # fmt: skip
+    """Were exit status 1, named ``free:``, ``estimates[0]:`` or ``controllers:``."""
+    capsys.readouterr()
+    status, _, err = run(capsys, "fit", *[estimates[f] for f in files], *options)
+    assert status == 2 and message in one_error_line(err)
