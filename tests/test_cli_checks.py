@@ -4,6 +4,8 @@ naming the option."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -143,3 +145,78 @@ def test_fit_mistakes_the_library_found_after_the_start_are_exit_status_2(capsys
     capsys.readouterr()
     status, _, err = run(capsys, "fit", *[estimates[f] for f in files], *options)
     assert status == 2 and message in one_error_line(err)
+
+
+# -- sweep, rotor and run --two-axis: input mistakes before the work ------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["sweep", "--kp", "2000,nan"], "--kp must be finite values, got [nan]"),
+        (["sweep", "--vary", "amp_bandwidth=nan"], "--vary amp_bandwidth must be finite values, got [nan]"),
+        (["sweep", "--vary", "mass=-1,1"], "--vary mass -1: mass must be a finite number > 0 (kg), got -1.0"),
+        (["sweep", "--kp", "2400", "--settle-periods", "-1"], "--settle-periods must be a whole number >= 0, got -1"),
+        (["run", "--two-axis", "--kp", "300"], "the two-axis closed loop is unstable"),
+        (["run", "--two-axis", "--force-law", "nonlinear"],
+         "--two-axis models the linear force law only; the rig's is 'nonlinear' (--force-law or --rig)"),
+        (["rotor", "experiment", "--seed", "-1"], "--seed must be a whole number >= 0, got -1"),
+        (["rotor", "sensitivity", "--speeds", "50000"], "the closed loop at speed 50000 rad/s is unstable"),
+        (["rotor", "unbalance", "--speeds", "0,50000"],
+         "--speeds must be below the Nyquist rate pi fs = 12566.4 rad/s for unbalance (the controller samples at "
+         "4000 Hz), got up to 50000"),
+    ],
+)  # fmt: skip
+def test_mistakes_found_in_the_run_are_now_found_before_it(capsys, tmp_path, monkeypatch, args, message) -> None:
+    """Were exit status 1 after the start ("seed must be ...", "x.force_law must be 'linear'", "speeds must be
+    below ...", an unstable loop that ``run`` without --two-axis refuses with status 2)."""
+    monkeypatch.chdir(tmp_path)
+    status, _, err = run(capsys, *args, "--periods", "2")
+    assert status == 2 and message in one_error_line(err)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_rotor_with_a_slow_controller_tabulates_lines_within_its_band(capsys, tmp_path) -> None:
+    """Was: rows at 10, 40, 100 and 200 Hz whatever the band: with fs 300 Hz (lines 1-149 Hz) 200 Hz showed the
+    149 Hz line; now the table follows the band as ``run``'s does."""
+    path = tmp_path / "slow.toml"
+    path.write_text("[controller]\nfs = 300.0\n")
+    status, out, err = run(capsys, "rotor", "experiment", "--rotor", str(path), "--periods", "2")
+    assert status == 0, err
+    rows = [line.split()[0] for line in out.splitlines() if "A.x<A.x" in line]
+    assert rows == ["1.0", "5.0", "28.0", "149.0"]
+
+
+# -- outputs that cannot be written are refused before the work -------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["run", "--save", "afile/e.csv"], "--save: 'afile' is not a directory"),
+        (["paper", "--out", "afile/out"], "--out: 'afile' is not a directory"),
+        (["run", "--save", "readonly/e.csv"], "--save: the directory 'readonly' is not writable"),
+        (["sweep", "--kp", "2000", "--out", "readonly/s.npz"], "--out: the directory 'readonly' is not writable"),
+        (["paper", "--out", "readonly"], "--out: the directory 'readonly' is not writable"),
+        (["identify", "rec.csv", "--mass", "1", "--out", "taken"], "--out: 'taken/estimate.csv' is a directory, where "
+         "a file goes"),
+        (["identify", "rec.csv", "--mass", "1", "--out", "taken", "--overwrite"], "--out: 'taken/estimate.csv' is a "
+         "directory"),
+    ],
+)  # fmt: skip
+def test_outputs_that_cannot_be_written_are_refused_first(capsys, tmp_path, monkeypatch, args, message) -> None:
+    """Were: "the directory 'afile' does not exist" (it is a file); a read-only directory failed at the write after
+    the run (exit status 1); a directory in the way of identify's estimate.csv was "overwritten" (exit 1)."""
+    import os
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "afile").write_text("a file")
+    (tmp_path / "readonly").mkdir()
+    (tmp_path / "taken" / "estimate.csv").mkdir(parents=True)
+    (tmp_path / "rec.csv").write_text("time,force,displacement\n")
+    real_access = os.access
+    monkeypatch.setattr(os, "access", lambda path, mode: Path(path).name != "readonly" and real_access(path, mode))
+    before = sorted(tmp_path.rglob("*"))
+    status, _, err = run(capsys, *args)
+    assert status == 2 and message in one_error_line(err)
+    assert sorted(tmp_path.rglob("*")) == before

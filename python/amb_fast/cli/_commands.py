@@ -13,7 +13,8 @@ import numpy as np
 
 from .._experiment import Estimate, identify, run_experiment
 from .._linear import AnyController, closed_loop_poles, require_stable, stability_margin
-from .._sweep import RIG_FIELDS, controller_params, sweep
+from .._params import Rig
+from .._sweep import RIG_FIELDS, controller_params, point_model, sweep
 from .._sweep_result import SWEPT
 from .._validate import integer, real
 from ..claims import natural_frequency
@@ -145,6 +146,22 @@ def _swept(args: argparse.Namespace, controller: AnyController) -> dict[str, Any
     return axes
 
 
+def _check_swept_values(args: argparse.Namespace, rig: Rig, controller: AnyController, axes: dict[str, Any]) -> None:
+    """The swept values as the run builds its points: a value the rig or the controller refuses (``--vary
+    mass=-1``, ``--kp nan``, a notch above fs/2) is a mistake in the options, refused before the work. Every
+    value is checked finite; the smallest and largest on the rig or controller (their limits are bounds)."""
+    for name, values in axes.items():
+        option = f"--{name}" if name in SWEPT and getattr(args, name, None) is not None else f"--vary {name}"
+        values = np.asarray(values, dtype=float)
+        if not np.all(np.isfinite(values)):
+            raise UsageError(f"{option} must be finite values, got {values[~np.isfinite(values)].tolist()}")
+        for value in {float(values.min()), float(values.max())}:
+            try:
+                point_model(rig, controller, {name: value})
+            except ValueError as error:
+                raise UsageError(f"{option} {value:g}: {error}") from None
+
+
 def cmd_sweep(args: argparse.Namespace) -> None:
     if args.out is None:  # NetCDF only where its extra is installed: no option asked for it
         netcdf = all(importlib.util.find_spec(m) is not None for m in ("h5netcdf", "xarray"))
@@ -167,6 +184,9 @@ def cmd_sweep(args: argparse.Namespace) -> None:
     if args.workers is not None:
         integer("--workers", args.workers, 1)
     integer("--periods", args.periods, 2)
+    if args.settle_periods is not None:
+        integer("--settle-periods", args.settle_periods, 0)
+    _check_swept_values(args, rig, pid, axes)
     excitation = _excitation(args, pid)
     _started(args)
     result = sweep(rig, pid, excitation, **axes, grid=args.grid, periods=args.periods,

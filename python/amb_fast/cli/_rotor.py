@@ -12,13 +12,23 @@ import numpy as np
 
 from .._excitation import schroeder_multisine
 from .._validate import integer
-from ..system import RotorRig, campbell, load_rotor, measure_sensitivity, run_experiment, unbalance_response
+from ..system import (
+    RotorRig,
+    campbell,
+    load_rotor,
+    measure_sensitivity,
+    require_stable,
+    run_experiment,
+    unbalance_response,
+)
 from ._options import (
     UsageError,
+    _option_names,
     _save_figure,
     _started,
     _values,
     check_save_and_figure,
+    default_at,
     default_f_max,
 )
 
@@ -50,7 +60,7 @@ def add_rotor_parser(subparsers: Any, parents: list[argparse.ArgumentParser]) ->
     rotor.add_argument("--seed", type=int, default=1, help="seed of the noise (experiment, sensitivity)")
     rotor.add_argument("--figure", type=Path, help="write a figure (.png, .pdf or .svg): experiment, campbell and "
                        "unbalance")  # fmt: skip
-    rotor.set_defaults(func=cmd_rotor)
+    rotor.set_defaults(func=cmd_rotor, option_names=_option_names("speeds", "periods", "seed", "rms", "unbalance"))
 
 
 def _unbalance(text: str) -> list[tuple[float, float, float]]:
@@ -82,8 +92,13 @@ def cmd_rotor(args: argparse.Namespace) -> None:
         raise UsageError(f"--speeds must be finite speeds in rad/s, got {args.speeds}")
     if args.step in ("sensitivity", "experiment"):  # options are mistakes before the run (exit 2), not failed runs
         integer("--periods", args.periods, 2)
+        integer("--seed", args.seed, 0)
         if args.speeds is not None:  # at the first speed given
             rig = rig.at_speed(float(args.speeds[0]))
+        require_stable(rig, pid, f"the closed loop at speed {rig.rotor.speed:g} rad/s")  # as `run` checks its loop
+    if args.step == "unbalance" and not np.all(np.abs(speeds) < np.pi * pid.fs):
+        raise UsageError(f"--speeds must be below the Nyquist rate pi fs = {np.pi * pid.fs:g} rad/s for unbalance (the "
+                         f"controller samples at {pid.fs:g} Hz), got up to {np.abs(speeds).max():g}")  # fmt: skip
     _started(args)
     meta = {"command": f"rotor {args.step}", "rotor": str(args.rotor or "RotorRig.example()")}
     if args.step == "experiment":
@@ -111,7 +126,7 @@ def _experiment(rig: RotorRig, pid: Any, args: argparse.Namespace, meta: dict) -
     values = est.process if amb and est.process is not None else est.k + 2j * np.pi * est.freq[:, None, None] * est.c
     label = "process" if amb else "actual"
     print(f"{'f (Hz)':>7}  {'entry':<10} {label + ' k (N/m)':>16} {'+- (N/m)':>10} {label + ' c (N s/m)':>18}")
-    for f in (10.0, 40.0, 100.0, 200.0):
+    for f in default_at(est.freq):  # 10, 40, 100, 200 Hz, or lines spread over a lower band (--rotor's fs)
         j = int(np.argmin(np.abs(est.freq - f)))
         w = 2 * np.pi * est.freq[j]
         for a, b in ((0, 0), (0, 1), (2, 2), (2, 3), (0, 2)):
