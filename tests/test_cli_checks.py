@@ -185,6 +185,31 @@ def test_a_rotor_with_a_slow_controller_tabulates_lines_within_its_band(capsys, 
     assert status == 0, err
     rows = [line.split()[0] for line in out.splitlines() if "A.x<A.x" in line]
     assert rows == ["1.0", "5.0", "28.0", "149.0"]
+    status, out, err = run(capsys, "rotor", "campbell", "--rotor", str(path), "--speeds", "0,10")
+    assert status == 0 and "whirling modes below 150 Hz" in out  # was "below 200 Hz": fs/2 is 150 Hz
+
+
+def test_the_default_run_up_stays_below_the_nyquist_rate_of_a_slow_controller(capsys, tmp_path) -> None:
+    """Was: exit 1, "speeds must be below the Nyquist rate pi fs = 502.655 rad/s, got array([10., ..., 600.])"
+    (120 numbers) for a 160 Hz controller and no --speeds: the default 10-600 rad/s did not follow fs."""
+    path = tmp_path / "slow.toml"
+    path.write_text("[controller]\nfs = 160.0\nkp = 1234.0\nki = 0.0\nkd = 7.29\n")
+    status, out, err = run(capsys, "rotor", "unbalance", "--rotor", str(path))
+    assert status == 0, err
+    assert "120 speeds 10-452.389 rad/s" in out  # 90 % of pi * 160 Hz
+    status, out, _ = run(capsys, "rotor", "unbalance", "--speeds", "10:600:3")
+    assert status == 0 and "3 speeds 10-600 rad/s" in out  # a fast controller keeps the paper's run-up
+
+
+def test_the_two_axis_figure_records_what_drew_it(capsys, tmp_path) -> None:
+    """As the one-axis figure does (version, rig, controller, seed in the PNG's text); it recorded nothing."""
+    pytest.importorskip("matplotlib")
+    path = tmp_path / "two.png"
+    status, _, err = run(capsys, "run", "--two-axis", "--kxy=1e4", "--f-max", "20", "--periods", "2", "--seed", "17",
+                         "--figure", str(path))  # fmt: skip
+    assert status == 0, err
+    png = path.read_bytes()
+    assert f"amb_fast {af.__version__}".encode() in png and b'"seed": 17' in png and b'"kxy": 10000.0' in png
 
 
 # -- outputs that cannot be written are refused before the work -------------------------------------------------

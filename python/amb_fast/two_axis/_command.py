@@ -11,7 +11,7 @@ import numpy as np
 from .._excitation import Multisine, schroeder_multisine
 from .._linear import AnyController
 from .._params import PID, Rig
-from ..io import atomic_write
+from ..io import atomic_write, figure_metadata
 from ..plots import plot_coefficients2
 from ..system import EstimateN
 from ._experiment import run_experiment
@@ -74,7 +74,11 @@ def run_two_axis(
         print(f"wrote {args.save}")
     if getattr(args, "figure", None):
         figure = plot_coefficients2(est, effective=effective_coefficients(two, controller, est.freq))
-        atomic_write(args.figure, lambda p: figure.savefig(p, dpi=120, format=Path(args.figure).suffix.lstrip(".")))
+        kind = Path(args.figure).suffix.lstrip(".").lower()
+        meta = {"command": "run --two-axis", "rig": two, "controller": repr(controller), "seed": options.get("seed"),
+                "periods": est.periods}  # fmt: skip
+        png = figure_metadata(meta) if kind == "png" else None  # what drew it, as the one-axis figure records
+        atomic_write(args.figure, lambda p: figure.savefig(p, dpi=120, format=kind, metadata=png))
         print(f"wrote {args.figure}")
     return est
 
