@@ -245,3 +245,35 @@ def test_outputs_that_cannot_be_written_are_refused_first(capsys, tmp_path, monk
     status, _, err = run(capsys, *args)
     assert status == 2 and message in one_error_line(err)
     assert sorted(tmp_path.rglob("*")) == before
+
+
+# -- defaults that follow the options given ---------------------------------------------------------------------
+
+
+def test_the_default_design_step_follows_a_narrow_band(capsys) -> None:
+    """Was: ``--band 0.5:0.9`` with the 1 Hz default step designed on one frequency (0.5 Hz) without a word."""
+    status, out, err = run(capsys, "design", "--stiffness", "6e4", "--band", "0.5:0.9")
+    assert status == 0, err
+    assert "on 0.5-0.9 Hz (21 frequencies)" in out
+    status, out, _ = run(capsys, "design", "--stiffness", "6e4")
+    assert status == 0 and "on 20-150 Hz (131 frequencies)" in out  # a wide band keeps its 1 Hz step
+
+
+def test_a_default_band_above_nyquist_is_not_blamed_on_band(capsys) -> None:
+    """Was: "--band must lie below fs/2 = 15 Hz ..., got 20:150" for ``design --fs 30``: no --band was given."""
+    status, _, err = run(capsys, "design", "--stiffness", "6e4", "--fs", "30")
+    assert status == 2
+    assert one_error_line(err) == ("amb-fast: error: the default band 20:150 Hz lies above fs/2 = 15 Hz (the "
+                                   "controller samples at 30 Hz): give a --band below it")  # fmt: skip
+
+
+def test_a_sweeps_csv_says_the_library_does_not_read_it(capsys, tmp_path) -> None:
+    """The one output the library cannot read back (a table for other tools, as documented): the command says so
+    where it writes it, and ``load_sweep`` refuses it with a clear error."""
+    path = tmp_path / "s.csv"
+    status, out, err = run(capsys, "sweep", "--kp", "2000", "--f-max", "20", "--periods", "2", "--no-progress", "--out",
+                           str(path))  # fmt: skip
+    assert status == 0, err
+    assert f"wrote {path} (a table for other tools: amb_fast.load_sweep reads .nc and .npz)" in out
+    with pytest.raises(ValueError, match=r"a sweep's \.csv is for other tools"):
+        af.load_sweep(path)

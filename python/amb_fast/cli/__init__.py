@@ -93,8 +93,9 @@ def build_parser() -> argparse.ArgumentParser:
                     "repeat it for more axes")  # fmt: skip
     sw.add_argument("--grid", choices=["product", "zip"], default="product", help="cross the values or pair them")
     sw.add_argument("--workers", type=int, help="threads (default: all cores)")
-    sw.add_argument("--out", help="output file: .nc (needs amb_fast[xarray]), .npz or .csv (default sweep.nc, or "
-                    "sweep.npz without the xarray extra)")  # fmt: skip
+    sw.add_argument("--out", help="output file: .nc (needs amb_fast[xarray]) or .npz, which amb_fast.load_sweep "
+                    "reads back, or .csv, a table for other tools (default sweep.nc, or sweep.npz without the xarray "
+                    "extra)")  # fmt: skip
     sw.add_argument("--no-progress", action="store_true", help="no progress bar")
     sw.set_defaults(func=cmd_sweep, option_names=MODEL_OPTION_NAMES)
 

@@ -245,7 +245,8 @@ def add_design_parser(subparsers: Any, parents: list[argparse.ArgumentParser]) -
     design.add_argument("--damping", type=float, help="target actual damping (N s/m)")
     design.add_argument("--band", type=_band, help="design band 'low:high' (Hz; default 20:150, or up to the "
                         "controller's fs/2 when that is lower)")  # fmt: skip
-    design.add_argument("--step", type=float, default=1.0, help="frequency step in the band (Hz; default 1)")
+    design.add_argument("--step", type=float, help="frequency step in the band (Hz; default 1, or a 20th of a band "
+                        "narrower than 20 Hz)")  # fmt: skip
     design.add_argument("--free", type=_names, default=["kp", "kd"], help="parameters to choose (default kp,kd)")
     design.add_argument("--max-sensitivity", type=float, help="limit of the sensitivity peak |S| (e.g. 3: zone A)")
     design.add_argument("--out", type=Path, help="write the designed controller to a controller file (.toml; "
@@ -269,10 +270,11 @@ def cmd_design(args: argparse.Namespace) -> None:
     low, high = (20.0, 150.0) if args.band is None else args.band
     if not (np.isfinite(high) and 0 < low < high):
         raise UsageError(f"--band must be finite frequencies 0 < low < high (Hz), got {low:g}:{high:g}")
-    real("--step", args.step, "Hz", positive=True)
-    if (high - low) / args.step > MAX_DESIGN_LINES:
-        raise UsageError(f"--step {args.step:g} gives {(high - low) / args.step:.3g} frequencies in {low:g}:{high:g} "
-                         f"Hz; at most {MAX_DESIGN_LINES} (a larger --step)")  # fmt: skip
+    step = min(1.0, (high - low) / 20) if args.step is None else args.step  # a narrow band keeps 21 frequencies
+    real("--step", step, "Hz", positive=True)
+    if (high - low) / step > MAX_DESIGN_LINES:
+        raise UsageError(f"--step {step:g} gives {(high - low) / step:.3g} frequencies in {low:g}:{high:g} Hz; at "
+                         f"most {MAX_DESIGN_LINES} (a larger --step)")  # fmt: skip
     rig = _rig(args)
     ((options, file),) = _controller_options(args, 1)
     controller = file[1] if file is not None else replace(PID.paper(), **options)
@@ -287,10 +289,13 @@ def cmd_design(args: argparse.Namespace) -> None:
             where = "the controller file" if file is not None else f"--{name.replace('_', '-')} X"
             raise UsageError(f"--free {name}: the controller's {name} is 'none', so the design has no start value; "
                              f"give one ({where})")  # fmt: skip
-    freq = np.arange(low, high + 0.5 * args.step, args.step)
+    freq = np.arange(low, high + 0.5 * step, step)
     nyquist = controller.fs / 2
     if args.band is None:  # the default follows the controller's fs (--fs 200: 20-99 Hz)
         freq = freq[freq < nyquist]
+        if freq.size == 0:  # no --band was given: say so, and what to give
+            raise UsageError(f"the default band {low:g}:{high:g} Hz lies above fs/2 = {nyquist:g} Hz (the controller "
+                             f"samples at {controller.fs:g} Hz): give a --band below it")  # fmt: skip
     if freq.size == 0 or freq[-1] >= nyquist:
         raise UsageError(f"--band must lie below fs/2 = {nyquist:g} Hz (the controller samples at {controller.fs:g} "
                          f"Hz), got {low:g}:{high:g}")  # fmt: skip

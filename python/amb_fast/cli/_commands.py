@@ -195,7 +195,10 @@ def cmd_sweep(args: argparse.Namespace) -> None:
     counts = {s: int(np.sum(result.status == s)) for s in np.unique(result.status)}
     print(f"{result.status.size} points: " + ", ".join(f"{n} {s}" for s, n in counts.items()))
     result.save(out)
-    print(f"wrote {out}")
+    other_tools = (
+        " (a table for other tools: amb_fast.load_sweep reads .nc and .npz)" if out.suffix.lower() == ".csv" else ""
+    )
+    print(f"wrote {out}{other_tools}")
 
 
 def _channel(text: str) -> str | int:
