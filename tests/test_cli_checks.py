@@ -227,6 +227,8 @@ def test_the_two_axis_figure_records_what_drew_it(capsys, tmp_path) -> None:
          "a file goes"),
         (["identify", "rec.csv", "--mass", "1", "--out", "taken", "--overwrite"], "--out: 'taken/estimate.csv' is a "
          "directory"),
+        (["identify", "estimate.csv", "--mass", "1", "--out", ".", "--overwrite"], "--out: 'estimate.csv' is the "
+         "recording itself; choose another --out"),
     ],
 )  # fmt: skip
 def test_outputs_that_cannot_be_written_are_refused_first(capsys, tmp_path, monkeypatch, args, message) -> None:
@@ -239,6 +241,7 @@ def test_outputs_that_cannot_be_written_are_refused_first(capsys, tmp_path, monk
     (tmp_path / "readonly").mkdir()
     (tmp_path / "taken" / "estimate.csv").mkdir(parents=True)
     (tmp_path / "rec.csv").write_text("time,force,displacement\n")
+    (tmp_path / "estimate.csv").write_text("time,force,displacement\n")  # a recording that --out . would replace
     real_access = os.access
     monkeypatch.setattr(os, "access", lambda path, mode: Path(path).name != "readonly" and real_access(path, mode))
     before = sorted(tmp_path.rglob("*"))

@@ -282,6 +282,8 @@ def cmd_identify(args: argparse.Namespace) -> None:
         check_output(args.figure, "--figure", FIGURE_SUFFIXES, args.overwrite)
     check_output_dir(args.out, "--out", ("estimate.csv",) if args.figure else ("estimate.csv", "estimate.png"),
                      args.overwrite)  # fmt: skip
+    if (args.out / "estimate.csv").resolve() == args.file.resolve():  # --overwrite would replace the input
+        raise UsageError(f"--out: {str(args.out / 'estimate.csv')!r} is the recording itself; choose another --out")
     _needs("matplotlib", "plot", "identify (it draws the figure)")
     rec = _read_recording(args)
     try:
