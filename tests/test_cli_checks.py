@@ -161,6 +161,7 @@ def test_fit_mistakes_the_library_found_after_the_start_are_exit_status_2(capsys
         (["run", "--two-axis", "--force-law", "nonlinear"],
          "--two-axis models the linear force law only; the rig's is 'nonlinear' (--force-law or --rig)"),
         (["rotor", "experiment", "--seed", "-1"], "--seed must be a whole number >= 0, got -1"),
+        (["paper", "--seed", "-1", "--no-progress"], "--seed must be a whole number >= 0, got -1"),
         (["rotor", "sensitivity", "--speeds", "50000"], "the closed loop at speed 50000 rad/s is unstable"),
         (["rotor", "unbalance", "--speeds", "0,50000"],
          "--speeds must be below the Nyquist rate pi fs = 12566.4 rad/s for unbalance (the controller samples at "
@@ -171,7 +172,7 @@ def test_mistakes_found_in_the_run_are_now_found_before_it(capsys, tmp_path, mon
     """Were exit status 1 after the start ("seed must be ...", "x.force_law must be 'linear'", "speeds must be
     below ...", an unstable loop that ``run`` without --two-axis refuses with status 2)."""
     monkeypatch.chdir(tmp_path)
-    status, _, err = run(capsys, *args, "--periods", "2")
+    status, _, err = run(capsys, *args, *([] if args[0] == "paper" else ["--periods", "2"]))  # paper has no periods
     assert status == 2 and message in one_error_line(err)
     assert list(tmp_path.iterdir()) == []
 

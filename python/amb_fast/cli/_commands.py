@@ -316,5 +316,6 @@ def cmd_paper(args: argparse.Namespace) -> None:
 
     check_output_dir(args.out, "--out", output_names(), args.overwrite)
     _needs("matplotlib", "plot", "paper (it draws the figures)")
+    integer("--seed", args.seed, 0)  # here, not in the study: exit status 2, named by its option
     _started(args)
     write_paper(args.out, seed=args.seed, progress=not args.no_progress)
