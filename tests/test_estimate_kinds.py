@@ -50,8 +50,9 @@ def test_both_kinds_share_the_line_fields(estimate) -> None:
 
 
 def test_an_npz_without_amb_fasts_header_is_refused_not_a_key_error(tmp_path) -> None:  # noqa: ANN001
-    """``run --two-axis --save x.npz`` writes a plain table (``save_estimate2``); before, reading it back
-    as an estimate or a sweep raised a bare ``KeyError: 'header'``."""
+    """A plain table (``save_estimate2``, which ``run --two-axis --save x.npz`` wrote before it wrote
+    ``EstimateN.save``'s file); before, reading it back as an estimate or a sweep raised a bare
+    ``KeyError: 'header'``."""
     path = tmp_path / "two.npz"
     np.savez(path, freq_Hz=np.arange(3.0), kxx_N_per_m=np.ones(3))
     with pytest.raises(ValueError, match=r"path must be an \.npz file written by EstimateN\.save, got .*two\.npz"):

@@ -74,8 +74,8 @@ def build_parser() -> argparse.ArgumentParser:
     run = sub.add_parser("run", parents=[common], help="one SPHS experiment; prints a summary")
     _add_model_options(run)
     run.add_argument("--at", type=_values, help=AT_HELP)
-    run.add_argument("--save", type=Path, help="write the estimate (.csv or .nc; load with amb_fast.load_estimate; "
-                     "with --two-axis .csv or .npz)")  # fmt: skip
+    run.add_argument("--save", type=Path, help="write the estimate (.csv or .nc; with --two-axis also .npz); "
+                     "amb_fast.load_estimate reads it back")  # fmt: skip
     run.add_argument("--figure", type=Path, help="write a figure (.png, .pdf or .svg)")
     add_two_axis_options(run)
     run.set_defaults(func=cmd_run, option_names=MODEL_OPTION_NAMES)
@@ -93,8 +93,9 @@ def build_parser() -> argparse.ArgumentParser:
                     "repeat it for more axes")  # fmt: skip
     sw.add_argument("--grid", choices=["product", "zip"], default="product", help="cross the values or pair them")
     sw.add_argument("--workers", type=int, help="threads (default: all cores)")
-    sw.add_argument("--out", help="output file: .nc (needs amb_fast[xarray]), .npz or .csv (default sweep.nc, or "
-                    "sweep.npz without the xarray extra)")  # fmt: skip
+    sw.add_argument("--out", help="output file: .nc (needs amb_fast[xarray]) or .npz, which amb_fast.load_sweep "
+                    "reads back, or .csv, a table for other tools (default sweep.nc, or sweep.npz without the xarray "
+                    "extra)")  # fmt: skip
     sw.add_argument("--no-progress", action="store_true", help="no progress bar")
     sw.set_defaults(func=cmd_sweep, option_names=MODEL_OPTION_NAMES)
 

@@ -11,13 +11,17 @@ import numpy as np
 
 from .._experiment import Estimate
 from .._params import PID, Rig
+from .._sweep import controller_params
 from .._toml import load_rig
+from .._validate import real
 from ..calibration import FITTABLE, PLAIN_PERIODS, read_estimate, records, same_controller
 from ..controllers import load_controller, recorded_controller
 from ._options import UsageError, _option_names, _started, check_output
 
 _RIG_FIELDS = {f.name for f in fields(Rig)} - {"force_law"}
 _PID_FIELDS = ("kp", "ki", "kd", "derivative_cutoff", "fs", "delay")
+_CONTROLLER_OPTIONS = [name.replace("_", "-") for name in _PID_FIELDS]
+MAX_DESIGN_LINES = 1_000_000  # design frequencies: beyond this --step is a typo, and the arrays fill the memory
 
 
 def _assignments(text: str) -> dict[str, Any]:
@@ -79,10 +83,16 @@ def _rig(args: argparse.Namespace) -> Rig:
     unknown = set(changes) - _RIG_FIELDS
     if unknown:
         raise ValueError(f"--set: {sorted(unknown)} are not Rig fields ({', '.join(sorted(_RIG_FIELDS))})")
-    if "substeps" in changes:
-        changes["substeps"] = int(changes["substeps"])
+    if "substeps" in changes:  # a whole number: 2.5 is a typo, not 2
+        substeps = changes["substeps"]
+        if substeps is None or not float(substeps).is_integer():
+            raise UsageError(f"--set substeps must be a whole number >= 1, got {substeps}")
+        changes["substeps"] = int(substeps)
     base = load_rig(args.rig) if args.rig is not None else Rig.paper()
-    return replace(base, **changes)
+    try:
+        return replace(base, **changes)
+    except ValueError as error:  # "mass must be ...": the value came from --set
+        raise UsageError(f"--set: {error}") from None
 
 
 def _controller_options(args: argparse.Namespace, count: int) -> list[tuple[dict[str, Any], Any]]:
@@ -165,7 +175,7 @@ def add_fit_parser(subparsers: Any, parents: list[argparse.ArgumentParser]) -> N
     fit.add_argument("--out", type=Path, help="write the fitted rig to a rig file (.toml; `design --rig`, "
                      "`run --rig`, amb_fast.load_rig read it)")  # fmt: skip
     _add_controller_options(fit, several=True)
-    fit.set_defaults(func=cmd_fit)
+    fit.set_defaults(func=cmd_fit, option_names=_option_names("free", "periods", *_CONTROLLER_OPTIONS))
 
 
 def cmd_fit(args: argparse.Namespace) -> None:
@@ -177,6 +187,7 @@ def cmd_fit(args: argparse.Namespace) -> None:
     paths = list(args.estimates)
     estimates = [read_estimate(p, blocks=args.periods, mass=rig.mass) for p in paths]
     controllers, notes = _fit_controllers(args, estimates, paths)
+    _check_fit(args, rig, estimates, paths, controllers)
     from ..calibration import fit_rig  # scipy.optimize and scipy.stats: only for this command
 
     _started(args)
@@ -191,6 +202,41 @@ def cmd_fit(args: argparse.Namespace) -> None:
         print(f"\nwrote the fitted rig to {str(args.out)!r}")
 
 
+def _check_fit(
+    args: argparse.Namespace, rig: Rig, estimates: list[Estimate], paths: list[Path], controllers: list[Any]
+) -> None:
+    """What :func:`fit_rig` would refuse only once the command has started: --free, and estimate files it
+    cannot weigh or combine (mistakes in the command line or its files, exit status 2)."""
+    _check_free(args.free, list(FITTABLE), "a rig field the fit can choose")
+    for name in args.free:
+        if getattr(rig, name) is None:
+            raise UsageError(f"--free {name}: the rig's {name} is 'none' (its stage is off), so the fit has no start "
+                             f"value; give one with --set {name}=X")  # fmt: skip
+    for est, path in zip(estimates, paths):
+        if est.blocks < 4:
+            raise UsageError(
+                f"{str(path)!r} averages {est.blocks} periods; a fit needs >= 4 (standard errors from "
+                "fewer cannot weight it)" + ("" if records(path) else "; give them with --periods")
+            )
+        weights = np.concatenate([np.asarray(est.k_std, float), np.asarray(est.c_std, float)])
+        if not np.all(np.isfinite(weights) & (weights > 0)):
+            raise UsageError(f"{str(path)!r} has standard errors k_std, c_std that are not all finite and > 0 (a "
+                             "noise-free estimate has no weights to fit with)")  # fmt: skip
+    rates = sorted({float(c.fs) for c in controllers})
+    if len(rates) > 1:
+        raise UsageError(f"the estimates' controllers run at different fs {rates} Hz: fit estimates of one rig at "
+                         "one fs")  # fmt: skip
+
+
+def _check_free(free: list[str], known: list[str], what: str) -> None:
+    """``--free``: one or more distinct names, each one of ``known``."""
+    if not free or len(set(free)) != len(free):
+        raise UsageError(f"--free must name one or more distinct parameters, got {','.join(free)!r}")
+    for name in free:
+        if name not in known:
+            raise UsageError(f"--free: {name!r} is not {what}; one of {', '.join(known)}")
+
+
 def add_design_parser(subparsers: Any, parents: list[argparse.ArgumentParser]) -> None:
     """Add ``design``: controller parameters for target actual stiffness and damping; prints the design."""
     design = subparsers.add_parser("design", parents=parents,
@@ -199,13 +245,15 @@ def add_design_parser(subparsers: Any, parents: list[argparse.ArgumentParser]) -
     design.add_argument("--damping", type=float, help="target actual damping (N s/m)")
     design.add_argument("--band", type=_band, help="design band 'low:high' (Hz; default 20:150, or up to the "
                         "controller's fs/2 when that is lower)")  # fmt: skip
-    design.add_argument("--step", type=float, default=1.0, help="frequency step in the band (Hz; default 1)")
+    design.add_argument("--step", type=float, help="frequency step in the band (Hz; default 1, or a 20th of a band "
+                        "narrower than 20 Hz)")  # fmt: skip
     design.add_argument("--free", type=_names, default=["kp", "kd"], help="parameters to choose (default kp,kd)")
     design.add_argument("--max-sensitivity", type=float, help="limit of the sensitivity peak |S| (e.g. 3: zone A)")
     design.add_argument("--out", type=Path, help="write the designed controller to a controller file (.toml; "
                         "`run --controller`, amb_fast.load_controller read it)")  # fmt: skip
     _add_controller_options(design, several=False)
-    design.set_defaults(func=cmd_design, option_names=_option_names("stiffness", "damping", "max-sensitivity", "free"))
+    design.set_defaults(func=cmd_design, option_names=_option_names("stiffness", "damping", "max-sensitivity", "free",
+                                                                    "step", *_CONTROLLER_OPTIONS))  # fmt: skip
 
 
 def cmd_design(args: argparse.Namespace) -> None:
@@ -213,16 +261,41 @@ def cmd_design(args: argparse.Namespace) -> None:
         check_output(args.out, "--out", (".toml",), args.overwrite)
     if args.stiffness is None and args.damping is None:
         raise ValueError("give --stiffness and/or --damping")
+    for option, value, unit in (("--stiffness", args.stiffness, "N/m"), ("--damping", args.damping, "N s/m")):
+        if value is not None:  # here, not in the design: a NaN target is an input mistake (exit status 2)
+            real(option, value, unit)
+    if args.max_sensitivity is not None and not (np.isfinite(args.max_sensitivity) and args.max_sensitivity > 1):
+        raise UsageError(f"--max-sensitivity must be a finite |S| peak > 1 (3: ISO 14839-3 zone A), got "
+                         f"{args.max_sensitivity:g}")  # fmt: skip
     low, high = (20.0, 150.0) if args.band is None else args.band
-    if not (0 < low < high) or args.step <= 0:
-        raise ValueError(f"--band must be 0 < low < high and --step > 0, got {low}:{high}, step {args.step}")
+    if not (np.isfinite(high) and 0 < low < high):
+        raise UsageError(f"--band must be finite frequencies 0 < low < high (Hz), got {low:g}:{high:g}")
+    step = min(1.0, (high - low) / 20) if args.step is None else args.step  # a narrow band keeps 21 frequencies
+    real("--step", step, "Hz", positive=True)
+    if (high - low) / step > MAX_DESIGN_LINES:
+        raise UsageError(f"--step {step:g} gives {(high - low) / step:.3g} frequencies in {low:g}:{high:g} Hz; at "
+                         f"most {MAX_DESIGN_LINES} (a larger --step)")  # fmt: skip
     rig = _rig(args)
     ((options, file),) = _controller_options(args, 1)
     controller = file[1] if file is not None else replace(PID.paper(), **options)
-    freq = np.arange(low, high + 0.5 * args.step, args.step)
+    params = controller_params(controller)
+    on_rig = [name for name in args.free if name in _RIG_FIELDS]
+    if on_rig:
+        raise UsageError(f"--free: {on_rig[0]!r} is a rig field; design chooses controller parameters (fit fits the "
+                         "rig)")  # fmt: skip
+    _check_free(args.free, list(params), "a parameter of the controller")
+    for name in args.free:
+        if params[name] is None:
+            where = "the controller file" if file is not None else f"--{name.replace('_', '-')} X"
+            raise UsageError(f"--free {name}: the controller's {name} is 'none', so the design has no start value; "
+                             f"give one ({where})")  # fmt: skip
+    freq = np.arange(low, high + 0.5 * step, step)
     nyquist = controller.fs / 2
     if args.band is None:  # the default follows the controller's fs (--fs 200: 20-99 Hz)
         freq = freq[freq < nyquist]
+        if freq.size == 0:  # no --band was given: say so, and what to give
+            raise UsageError(f"the default band {low:g}:{high:g} Hz lies above fs/2 = {nyquist:g} Hz (the controller "
+                             f"samples at {controller.fs:g} Hz): give a --band below it")  # fmt: skip
     if freq.size == 0 or freq[-1] >= nyquist:
         raise UsageError(f"--band must lie below fs/2 = {nyquist:g} Hz (the controller samples at {controller.fs:g} "
                          f"Hz), got {low:g}:{high:g}")  # fmt: skip

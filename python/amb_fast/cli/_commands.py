@@ -13,12 +13,14 @@ import numpy as np
 
 from .._experiment import Estimate, identify, run_experiment
 from .._linear import AnyController, closed_loop_poles, require_stable, stability_margin
-from .._sweep import RIG_FIELDS, controller_params, sweep
+from .._params import Rig
+from .._sweep import RIG_FIELDS, controller_params, point_model, sweep
 from .._sweep_result import SWEPT
 from .._validate import integer, real
 from ..claims import natural_frequency
 from ..io import load_recording
 from ..two_axis import run_two_axis
+from ..two_axis._command import two_axis_model
 from ._options import (
     ESTIMATE_SUFFIXES,
     FIGURE_SUFFIXES,
@@ -86,6 +88,10 @@ def cmd_run(args: argparse.Namespace) -> None:
     for name, unit in cross.items():  # here, not in the run: a NaN is an input mistake, named by its option
         real("--" + name.replace("_", "-"), getattr(args, name), unit)
     if args.two_axis:
+        if rig.force_law != "linear":  # the library names x.force_law; this is the rig of the options
+            raise UsageError(f"--two-axis models the linear force law only; the rig's is {rig.force_law!r} "
+                             "(--force-law or --rig)")  # fmt: skip
+        two_axis_model(args, rig, pid)  # an unstable loop is a mistake in the options, as with one axis
         _started(args)
         run_two_axis(args, rig, pid, excitation)
         return
@@ -140,6 +146,22 @@ def _swept(args: argparse.Namespace, controller: AnyController) -> dict[str, Any
     return axes
 
 
+def _check_swept_values(args: argparse.Namespace, rig: Rig, controller: AnyController, axes: dict[str, Any]) -> None:
+    """The swept values as the run builds its points: a value the rig or the controller refuses (``--vary
+    mass=-1``, ``--kp nan``, a notch above fs/2) is a mistake in the options, refused before the work. Every
+    value is checked finite; the smallest and largest on the rig or controller (their limits are bounds)."""
+    for name, values in axes.items():
+        option = f"--{name}" if name in SWEPT and getattr(args, name, None) is not None else f"--vary {name}"
+        values = np.asarray(values, dtype=float)
+        if not np.all(np.isfinite(values)):
+            raise UsageError(f"{option} must be finite values, got {values[~np.isfinite(values)].tolist()}")
+        for value in {float(values.min()), float(values.max())}:
+            try:
+                point_model(rig, controller, {name: value})
+            except ValueError as error:
+                raise UsageError(f"{option} {value:g}: {error}") from None
+
+
 def cmd_sweep(args: argparse.Namespace) -> None:
     if args.out is None:  # NetCDF only where its extra is installed: no option asked for it
         netcdf = all(importlib.util.find_spec(m) is not None for m in ("h5netcdf", "xarray"))
@@ -162,6 +184,9 @@ def cmd_sweep(args: argparse.Namespace) -> None:
     if args.workers is not None:
         integer("--workers", args.workers, 1)
     integer("--periods", args.periods, 2)
+    if args.settle_periods is not None:
+        integer("--settle-periods", args.settle_periods, 0)
+    _check_swept_values(args, rig, pid, axes)
     excitation = _excitation(args, pid)
     _started(args)
     result = sweep(rig, pid, excitation, **axes, grid=args.grid, periods=args.periods,
@@ -170,7 +195,10 @@ def cmd_sweep(args: argparse.Namespace) -> None:
     counts = {s: int(np.sum(result.status == s)) for s in np.unique(result.status)}
     print(f"{result.status.size} points: " + ", ".join(f"{n} {s}" for s, n in counts.items()))
     result.save(out)
-    print(f"wrote {out}")
+    other_tools = (
+        " (a table for other tools: amb_fast.load_sweep reads .nc and .npz)" if out.suffix.lower() == ".csv" else ""
+    )
+    print(f"wrote {out}{other_tools}")
 
 
 def _channel(text: str) -> str | int:
@@ -254,6 +282,8 @@ def cmd_identify(args: argparse.Namespace) -> None:
         check_output(args.figure, "--figure", FIGURE_SUFFIXES, args.overwrite)
     check_output_dir(args.out, "--out", ("estimate.csv",) if args.figure else ("estimate.csv", "estimate.png"),
                      args.overwrite)  # fmt: skip
+    if (args.out / "estimate.csv").resolve() == args.file.resolve():  # --overwrite would replace the input
+        raise UsageError(f"--out: {str(args.out / 'estimate.csv')!r} is the recording itself; choose another --out")
     _needs("matplotlib", "plot", "identify (it draws the figure)")
     rec = _read_recording(args)
     try:
@@ -286,5 +316,6 @@ def cmd_paper(args: argparse.Namespace) -> None:
 
     check_output_dir(args.out, "--out", output_names(), args.overwrite)
     _needs("matplotlib", "plot", "paper (it draws the figures)")
+    integer("--seed", args.seed, 0)  # here, not in the study: exit status 2, named by its option
     _started(args)
     write_paper(args.out, seed=args.seed, progress=not args.no_progress)

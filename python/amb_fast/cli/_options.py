@@ -4,6 +4,7 @@ model they build."""
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import sys
 from collections.abc import Iterable, Sequence
@@ -60,7 +61,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 ESTIMATE_SUFFIXES = (".csv", ".nc")
-TWO_AXIS_SUFFIXES = (".csv", ".npz")  # amb-fast run --two-axis --save
+TWO_AXIS_SUFFIXES = (".csv", ".nc", ".npz")  # amb-fast run --two-axis --save: EstimateN.save's
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 SWEEP_SUFFIXES = (".nc", ".npz", ".csv")
 
@@ -69,12 +70,22 @@ def _existing_parent(path: Path) -> Path:
     return path.parent if str(path.parent) else Path(".")
 
 
+def _writable_directory(directory: Path, option: str) -> None:
+    """The directory a file goes into: it exists, is a directory and may be written (an atomic write puts a
+    temporary file beside the target)."""
+    if not directory.exists():
+        raise UsageError(f"{option}: the directory {str(directory)!r} does not exist")
+    if not directory.is_dir():
+        raise UsageError(f"{option}: {str(directory)!r} is not a directory")
+    if not os.access(directory, os.W_OK | os.X_OK):
+        raise UsageError(f"{option}: the directory {str(directory)!r} is not writable")
+
+
 def check_output(path: Path, option: str, suffixes: Sequence[str], overwrite: bool) -> Path:
     """Refuse an output path before any work: its suffix, its directory, an existing file (without --overwrite)."""
     if path.suffix.lower() not in suffixes:
         raise UsageError(f"{option} must end in {', '.join(suffixes)}, got {str(path)!r}")
-    if not _existing_parent(path).is_dir():
-        raise UsageError(f"{option}: the directory {str(_existing_parent(path))!r} does not exist")
+    _writable_directory(_existing_parent(path), option)
     if path.is_dir():
         raise UsageError(f"{option}: {str(path)!r} is a directory")
     if path.exists() and not overwrite:
@@ -86,8 +97,10 @@ def check_output_dir(directory: Path, option: str, names: Sequence[str], overwri
     """An output folder: it may not exist yet (its parent must); files in it are not overwritten without --overwrite."""
     if directory.exists() and not directory.is_dir():
         raise UsageError(f"{option}: {str(directory)!r} exists and is not a directory")
-    if not _existing_parent(directory).is_dir():
-        raise UsageError(f"{option}: the directory {str(_existing_parent(directory))!r} does not exist")
+    _writable_directory(directory if directory.exists() else _existing_parent(directory), option)
+    folders = [name for name in names if (directory / name).is_dir()]
+    if folders:  # not even --overwrite replaces a directory by a file
+        raise UsageError(f"{option}: {str(directory / folders[0])!r} is a directory, where a file goes")
     existing = [name for name in names if (directory / name).exists()]
     if existing and not overwrite:
         shown = ", ".join(existing[:4]) + (" ..." if len(existing) > 4 else "")

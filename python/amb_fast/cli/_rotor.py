@@ -12,13 +12,23 @@ import numpy as np
 
 from .._excitation import schroeder_multisine
 from .._validate import integer
-from ..system import RotorRig, campbell, load_rotor, measure_sensitivity, run_experiment, unbalance_response
+from ..system import (
+    RotorRig,
+    campbell,
+    load_rotor,
+    measure_sensitivity,
+    require_stable,
+    run_experiment,
+    unbalance_response,
+)
 from ._options import (
     UsageError,
+    _option_names,
     _save_figure,
     _started,
     _values,
     check_save_and_figure,
+    default_at,
     default_f_max,
 )
 
@@ -35,8 +45,9 @@ def add_rotor_parser(subparsers: Any, parents: list[argparse.ArgumentParser]) ->
                        "response")  # fmt: skip
     rotor.add_argument("--rotor", type=Path, help="rotor file (.toml; default RotorRig.example() under its PID)")
     rotor.add_argument("--speeds", type=_values, help="rad/s, 'a,b,c' or 'start:stop:count' (default 0:6000:61 for "
-                       "campbell, 10:600:120 for unbalance; experiment and sensitivity: the rotor's speed, or the "
-                       "first value given)")  # fmt: skip
+                       "campbell; 10:600:120 for unbalance, up to 90 %% of the Nyquist rate pi fs of a controller "
+                       "too slow for 600; experiment and sensitivity: the rotor's speed, or the first value "
+                       "given)")  # fmt: skip
     rotor.add_argument("--exciter", choices=["shaker", "amb"], default="shaker",
                        help="experiment: shakers at the bearing planes, or the bearings themselves (the multisine "
                        "on the current commands; the force from coil current and probes)")  # fmt: skip
@@ -50,7 +61,7 @@ def add_rotor_parser(subparsers: Any, parents: list[argparse.ArgumentParser]) ->
     rotor.add_argument("--seed", type=int, default=1, help="seed of the noise (experiment, sensitivity)")
     rotor.add_argument("--figure", type=Path, help="write a figure (.png, .pdf or .svg): experiment, campbell and "
                        "unbalance")  # fmt: skip
-    rotor.set_defaults(func=cmd_rotor)
+    rotor.set_defaults(func=cmd_rotor, option_names=_option_names("speeds", "periods", "seed", "rms", "unbalance"))
 
 
 def _unbalance(text: str) -> list[tuple[float, float, float]]:
@@ -76,14 +87,21 @@ def cmd_rotor(args: argparse.Namespace) -> None:
         raise UsageError(f"--rms must be a finite amplitude > 0 ({'A' if args.exciter == 'amb' else 'N'} rms), "
                          f"got {args.rms:g}")  # fmt: skip
     unbalance = _unbalance(args.unbalance) if args.step == "unbalance" else None
-    defaults = {"campbell": np.linspace(0.0, 6000.0, 61), "unbalance": np.linspace(10.0, 600.0, 120)}
+    # The run-up stays below the Nyquist rate pi fs of a slow controller (fs < 191 Hz).
+    top = 600.0 if 600.0 < np.pi * pid.fs else 0.9 * np.pi * pid.fs
+    defaults = {"campbell": np.linspace(0.0, 6000.0, 61), "unbalance": np.linspace(min(10.0, top / 2), top, 120)}
     speeds: np.ndarray = args.speeds if args.speeds is not None else defaults.get(args.step, np.zeros(1))
     if speeds.size == 0 or not np.all(np.isfinite(speeds)):
         raise UsageError(f"--speeds must be finite speeds in rad/s, got {args.speeds}")
     if args.step in ("sensitivity", "experiment"):  # options are mistakes before the run (exit 2), not failed runs
         integer("--periods", args.periods, 2)
+        integer("--seed", args.seed, 0)
         if args.speeds is not None:  # at the first speed given
             rig = rig.at_speed(float(args.speeds[0]))
+        require_stable(rig, pid, f"the closed loop at speed {rig.rotor.speed:g} rad/s")  # as `run` checks its loop
+    if args.step == "unbalance" and not np.all(np.abs(speeds) < np.pi * pid.fs):
+        raise UsageError(f"--speeds must be below the Nyquist rate pi fs = {np.pi * pid.fs:g} rad/s for unbalance (the "
+                         f"controller samples at {pid.fs:g} Hz), got up to {np.abs(speeds).max():g}")  # fmt: skip
     _started(args)
     meta = {"command": f"rotor {args.step}", "rotor": str(args.rotor or "RotorRig.example()")}
     if args.step == "experiment":
@@ -111,7 +129,7 @@ def _experiment(rig: RotorRig, pid: Any, args: argparse.Namespace, meta: dict) -
     values = est.process if amb and est.process is not None else est.k + 2j * np.pi * est.freq[:, None, None] * est.c
     label = "process" if amb else "actual"
     print(f"{'f (Hz)':>7}  {'entry':<10} {label + ' k (N/m)':>16} {'+- (N/m)':>10} {label + ' c (N s/m)':>18}")
-    for f in (10.0, 40.0, 100.0, 200.0):
+    for f in default_at(est.freq):  # 10, 40, 100, 200 Hz, or lines spread over a lower band (--rotor's fs)
         j = int(np.argmin(np.abs(est.freq - f)))
         w = 2 * np.pi * est.freq[j]
         for a, b in ((0, 0), (0, 1), (2, 2), (2, 3), (0, 2)):
@@ -131,14 +149,15 @@ def _campbell(rig: RotorRig, pid: Any, speeds: np.ndarray, args: argparse.Namesp
     onset = "stable at every speed given" if result.onset_speed is None else (
         f"UNSTABLE from {result.onset_speed:g} rad/s")  # fmt: skip
     print(f"Campbell diagram, {speeds.size} speeds {speeds[0]:g}-{speeds[-1]:g} rad/s: {onset}")
-    print(f"{'speed (rad/s)':>14}  whirling modes below 200 Hz: frequency (Hz), damping ratio, whirl")
+    top = min(200.0, pid.fs / 2)  # Hz: a slow controller's loop has no modes above its fs/2
+    print(f"{'speed (rad/s)':>14}  whirling modes below {top:g} Hz: frequency (Hz), damping ratio, whirl")
     for i in np.unique(np.linspace(0, speeds.size - 1, min(5, speeds.size)).astype(int)):
-        shown = (result.whirl[i] != 0) & (result.damping[i] < 0.9) & (result.frequency[i] < 200.0)
+        shown = (result.whirl[i] != 0) & (result.damping[i] < 0.9) & (result.frequency[i] < top)
         rows = zip(result.frequency[i][shown], result.damping[i][shown], result.whirl[i][shown])
         modes = sorted({(round(float(f), 1), round(float(d), 3), "F" if w > 0 else "B") for f, d, w in rows})
         print(f"{speeds[i]:>14g}  " + ", ".join(f"{f} Hz {d} {w}" for f, d, w in modes))
     if args.figure is not None:
-        _save_figure(result.plot(max_frequency=200.0).figure, args.figure, meta)
+        _save_figure(result.plot(max_frequency=top).figure, args.figure, meta)
 
 
 def _sensitivity(rig: RotorRig, pid: Any, args: argparse.Namespace) -> None:
