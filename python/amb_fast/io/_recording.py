@@ -46,9 +46,39 @@ class Recording(ArrayRecord):
     source: str = ""
     fs_from: str = ""
 
+    def __post_init__(self) -> None:
+        """Checked once here, for a loaded and a hand-built recording alike: 1-D float channels of one length
+        (at least 2 samples), finite samples, fs a finite rate > 0 (Hz)."""
+        where = f" ({self.source})" if self.source else ""
+        force, displacement = (_samples(name, getattr(self, name)) for name in ("force", "displacement"))
+        require(force.size >= 2, "force samples", force.size, f"at least 2{where}")
+        require(displacement.size == force.size, "displacement samples", displacement.size,
+                f"as many as force's ({force.size}){where}")  # fmt: skip
+        for name, values in (("force", force), ("displacement", displacement)):
+            finite = np.isfinite(values)
+            if not finite.all():
+                bad = int(np.argmin(finite))
+                raise ValueError(f"{name} must be finite, got {float(values[bad])!r} at sample {bad}{where}")
+        require(isinstance(self.source, str), "source", self.source, "a str")
+        require(isinstance(self.fs_from, str), "fs_from", self.fs_from, "a str")
+        # frozen: the checked arrays and float replace what was given
+        object.__setattr__(self, "force", force)
+        object.__setattr__(self, "displacement", displacement)
+        object.__setattr__(self, "fs", real("fs", self.fs, "Hz", positive=True))
+
     def fs_note(self) -> str:
         """``"fs 4000.1 Hz (from the time column 'Time [s]' of rig.csv)"``: to add to an error about fs or f0."""
         return f"fs {self.fs:.10g} Hz" + (f" (from {self.fs_from})" if self.fs_from else "")
+
+
+def _samples(name: str, values: object) -> np.ndarray:
+    """``series`` with a value that is not numbers (text, None, objects) named too."""
+    try:
+        return series(name, values)
+    except (TypeError, ValueError) as error:
+        if "shape" in str(error):
+            raise
+        raise ValueError(f"{name} must be samples (a 1-D array of numbers), got {type(values).__name__}") from None
 
 
 def save_recording(
@@ -172,4 +202,4 @@ def load_recording(
     where = path.name + (f" recording {name!r}" if name else "")
     source = f"{where}: {', '.join(described)}; fs {fs:.10g} Hz " + ("given" if found is None else f"from its {origin}")
     fs_from = "fs= (given)" if found is None else f"the {origin} of {where}"
-    return Recording(series("force", f_values), series("displacement", y_values), fs, source, fs_from)
+    return Recording(f_values, y_values, fs, source, fs_from)

@@ -6,6 +6,7 @@ chosen columns (pandas' C parser when installed, numpy's ``loadtxt`` otherwise).
 
 from __future__ import annotations
 
+import codecs
 import csv
 import itertools
 import re
@@ -37,6 +38,7 @@ class _Dialect:
     line_bytes: int = 64  # typical length of a data line
     rate: tuple[float, str] | None = None  # fs (Hz) stated in the metadata above the header, and that line
     above: str = ""  # with no header: the non-numeric row just above the data, when it has too few names
+    encoding: str = "utf-8-sig"
 
 
 # A sampling rate or interval stated in the metadata: "Sample rate: 4000 Hz", "Sampling Frequency = 4 kHz",
@@ -108,6 +110,25 @@ def _data_start(rows: list[list[str]], decimal_comma: bool) -> int | None:
     return None
 
 
+def text_encoding(path: Path) -> str:
+    """The encoding of a text recording: UTF-16 or UTF-8 by their byte-order mark; else UTF-8 if its first
+    CHUNK_BYTES decode as UTF-8; else Windows-1252 (European DAQ software writes ``µm`` as the one byte 0xB5,
+    as Latin-1 does), or Latin-1 for the bytes Windows-1252 leaves undefined."""
+    with open(path, "rb") as handle:
+        head = handle.read(CHUNK_BYTES)
+    if head.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        return "utf-16"
+    try:
+        codecs.getincrementaldecoder("utf-8")().decode(head, final=False)  # a character cut at the end is fine
+    except UnicodeDecodeError:
+        try:
+            head.decode("cp1252")
+        except UnicodeDecodeError:
+            return "latin-1"
+        return "cp1252"
+    return "utf-8-sig"
+
+
 def sniff(path: Path) -> _Dialect:
     """Delimiter, decimal comma, column names and the lines before the data of a text recording.
 
@@ -115,7 +136,8 @@ def sniff(path: Path) -> _Dialect:
     the row just before it with as many fields (a units row may sit between them), and anything before is
     metadata (LabVIEW's ``***End_of_Header***`` blocks, a DAQ's ``key: value`` preamble) and skipped. A file
     without a header row has its columns named ``column 0``, ``column 1``, ... (choose them by index)."""
-    with open(path, encoding="utf-8-sig", errors="replace", newline="") as handle:
+    encoding = text_encoding(path)
+    with open(path, encoding=encoding, errors="replace", newline="") as handle:
         lines = [line.rstrip("\r\n") for line in itertools.islice(handle, 256)]
     kept = [j for j, line in enumerate(lines) if line.strip() and not line.lstrip().startswith(("#", "%"))]
     if not kept:
@@ -130,6 +152,13 @@ def sniff(path: Path) -> _Dialect:
             if start is None:
                 continue
             width = len(rows[start])
+            last = rows[start - 1] if start >= 1 else []
+            filled = [f for f in last if f.strip()]
+            if filled and all(_numeric(f, decimal_comma) for f in filled):  # numbers: not a header
+                raise ValueError(f"{path.name}: line {kept[start - 1] + 1} ({lines[kept[start - 1]].strip()!r}) is a "
+                                 f"row of numbers with a field empty or missing ({len(last)} fields, "
+                                 f"{len(last) - len(filled)} empty; the rows after it have {width} numbers): a lost "
+                                 "sample? amb_fast never guesses one: repair the row or cut the file there")  # fmt: skip
             # The header has the data's fields, or one more whose column is empty (LabVIEW's "Comment").
             before = [r[:width] for r in rows[max(0, start - 2) : start] if len(r) in (width, width + 1)]
             units_row = len(before) == 2 and all(
@@ -151,7 +180,7 @@ def sniff(path: Path) -> _Dialect:
             percent = any(line.lstrip().startswith("%") for line in lines[skip:])
             body = [lines[j] for j in kept[start:]]
             line_bytes = max(16, int(np.mean([len(line) + 1 for line in body])))
-            return _Dialect(delimiter, decimal_comma, names, skip, percent, line_bytes, rate, above)
+            return _Dialect(delimiter, decimal_comma, names, skip, percent, line_bytes, rate, above, encoding)
     raise ValueError(f"{path.name}: could not read it as a table (rows of numbers separated by ',', ';', tabs or "
                      "blanks, after an optional header row naming the columns)")  # fmt: skip
 
@@ -177,7 +206,7 @@ def _load_text(
         raise
     t_index = None if headerless and not isinstance(time, int) else _time_index(names, time, path)
     use = columns + ([t_index] if t_index is not None else [])
-    count = _count_rows(path, dialect.skip)
+    count = _count_rows(path, dialect.skip, dialect.encoding)
     out = np.empty((len(use), count))
     row = 0
     for chunk in _chunks(path, dialect, use):  # the chosen columns, in the order of `use`
@@ -219,19 +248,19 @@ def _chunks(path: Path, dialect: _Dialect, use: list[int]) -> Iterator[np.ndarra
                 path, sep=dialect.delimiter or r"\s+", header=None, skiprows=dialect.skip, usecols=sorted(set(use)),
                 chunksize=max(256, CHUNK_BYTES // dialect.line_bytes), dtype=np.float64,
                 decimal="," if dialect.decimal_comma else ".", comment="#", quotechar='"', skipinitialspace=True,
-                encoding="utf-8-sig", engine="c",
+                encoding=dialect.encoding, encoding_errors="replace", engine="c",
             ) as reader:  # fmt: skip
                 for frame in reader:
                     yield frame[use].to_numpy(dtype=np.float64)
                     rows += len(frame)
             return
-        with open(path, encoding="utf-8-sig", errors="replace", newline="") as handle:
+        with open(path, encoding=dialect.encoding, errors="replace", newline="") as handle:
             for _ in range(dialect.skip):
                 handle.readline()
             while block := handle.readlines(CHUNK_BYTES):
                 if dialect.decimal_comma:
                     block = [line.replace(",", ".") for line in block]
-                if '"' in block[0] or '"' in block[-1]:
+                if any('"' in line for line in block):  # quoted numbers, in any row (not only the first or last)
                     block = [line.replace('"', "") for line in block]
                 chunk = np.loadtxt(block, delimiter=dialect.delimiter, usecols=use, ndmin=2, comments=("#", "%"),
                                    dtype=np.float64)  # fmt: skip
@@ -241,8 +270,12 @@ def _chunks(path: Path, dialect: _Dialect, use: list[int]) -> Iterator[np.ndarra
         raise ValueError(f"{path.name}: a row after line {dialect.skip + rows} is not numeric ({error})") from None
 
 
-def _count_rows(path: Path, skip: int) -> int:
+def _count_rows(path: Path, skip: int, encoding: str = "utf-8-sig") -> int:
     """Data rows after ``skip`` lines (blank and comment lines excluded), without holding the file."""
+    if encoding == "utf-16":  # two bytes a character: counted as text
+        with open(path, encoding=encoding, errors="replace") as text:
+            lines = (line.strip() for line in itertools.islice(text, skip, None))
+            return sum(1 for line in lines if line and not line.startswith(("#", "%")))
     with open(path, "rb") as handle:
         rows = (line.strip() for line in itertools.islice(handle, skip, None))
         return sum(1 for row in rows if row and not row.startswith((b"#", b"%")))

@@ -1,0 +1,152 @@
+"""Recordings as acquisition systems write them (session 4): quoted numbers in any row, Latin-1/Windows-1252
+and UTF-16 text, a row with a lost sample, units after a slash, LabVIEW's unit labels, MATLAB structs; and a
+hand-built :class:`amb_fast.Recording` checked like a loaded one.
+
+Every file is written here, a few rows long.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import amb_fast as af
+
+FS = 4000.0
+N = 16
+T = np.arange(N) / FS
+F = np.sin(np.arange(N))  # N
+Y = 1e-6 * np.cos(np.arange(N))  # m
+
+
+@pytest.fixture(params=["pandas", "numpy"])
+def text_parser(request, monkeypatch) -> str:
+    """Text is parsed by pandas when it is installed, else by numpy: the text tests run with both."""
+    if request.param == "numpy":
+        monkeypatch.setitem(__import__("sys").modules, "pandas", None)
+    else:
+        pytest.importorskip("pandas")
+    return request.param
+
+
+def rows(sep: str = ",", y_scale: float = 1.0, end: str = "\n", comma: bool = False) -> list[str]:
+    """The data lines time, force, displacement (times y_scale), %.10g; decimal commas if comma."""
+    out = []
+    for t, f, y in zip(T, F, Y * y_scale):
+        line = sep.join(f"{v:.10g}" for v in (t, f, y))
+        out.append((line.replace(".", ",") if comma else line) + end)
+    return out
+
+
+def check(rec: af.Recording) -> None:
+    assert rec.fs == FS
+    np.testing.assert_allclose(rec.force, F, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(rec.displacement, Y, rtol=1e-9, atol=1e-18)
+
+
+# -- item 1: quoted numbers ------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("quoted", [[5], [1, 3, 5, 7, 9, 11, 13], list(range(N))], ids=["one-middle", "some", "all"])
+def test_quoted_numbers_in_any_row_are_read(tmp_path, text_parser, quoted) -> None:
+    """numpy's parser stripped the quotes only when the first or last line of a block had them: a quoted
+    middle row was refused ("could not convert string '"-0.9589242747"'")."""
+    lines = rows()
+    for j in quoted:
+        lines[j] = ",".join(f'"{v}"' for v in lines[j].strip().split(",")) + "\n"
+    path = tmp_path / "quoted.csv"
+    path.write_text('"time","force","displacement"\n' + "".join(lines))
+    check(af.load_recording(path))
+
+
+# -- item 3: encodings, line ends, separators ------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("encoding", ["latin-1", "cp1252"])
+def test_a_latin1_or_windows_header_with_micro_is_read(tmp_path, text_parser, encoding) -> None:
+    """µ is the one byte 0xB5 there: was refused (pandas: "'utf-8' codec can't decode byte 0xb5", numpy: the
+    unit read as '\ufffdm' and refused)."""
+    path = tmp_path / "eu.csv"
+    text = "Zeit [s];Kraft [N];Weg [µm]\r\n" + "".join(rows(";", 1e6, "\r\n", comma=True))
+    path.write_bytes(text.encode(encoding))
+    rec = af.load_recording(path, force="Kraft", displacement="Weg")
+    check(rec)
+    assert "'Weg [µm]' (µm -> m)" in rec.source
+
+
+def test_utf16_text_as_excel_saves_unicode_text(tmp_path, text_parser) -> None:
+    path = tmp_path / "excel.txt"
+    path.write_text("time\tforce\tdisplacement [µm]\r\n" + "".join(rows("\t", 1e6, "\r\n")), encoding="utf-16")
+    check(af.load_recording(path))
+
+
+@pytest.mark.parametrize(
+    ("header", "sep", "end", "comma", "bom"),
+    [("time;force;displacement\n", ";", "\n", True, False), ("time,force,displacement\r\n", ",", "\r\n", False, True),
+     ("time\tforce\tdisplacement\n", "\t", "\n", False, False), ("time;force;displacement;\n", ";", ";\n", True, False),
+     ("time,force,displacement,\n", ",", "\n", False, False), ("time,force,displacement\n", ",", ",\n", False, False)],
+    ids=["semicolon-decimal-comma", "bom-crlf", "tab", "trailing-semicolons", "trailing-in-header", "trailing-in-data"],
+)  # fmt: skip
+def test_usual_dialects_are_read_exactly(tmp_path, text_parser, header, sep, end, comma, bom) -> None:
+    """These were already read right (audit); kept so they stay so."""
+    path = tmp_path / "d.csv"
+    path.write_text(("\ufeff" if bom else "") + header + "".join(rows(sep, 1.0, end, comma)), newline="")
+    check(af.load_recording(path))
+
+
+@pytest.mark.parametrize("broken", ["0.001,,1e-6", "0.001,0.5"], ids=["empty-field", "short-row"])
+def test_a_row_with_a_lost_sample_is_refused_not_taken_for_the_header(tmp_path, text_parser, broken) -> None:
+    """Was: the broken row was taken for the header and the rows above it dropped: the default names were
+    "not found", and by index (force=1, displacement=2, time=0) 11 of 16 rows were read without a word."""
+    lines = rows()
+    lines[4] = broken + "\n"
+    path = tmp_path / "gap.csv"
+    path.write_text("time,force,displacement\n" + "".join(lines))
+    match = rf"gap.csv: line 6 \('{broken}'\) is a row of numbers with a field empty or missing"
+    for keys in ({}, {"force": 1, "displacement": 2, "time": 0}):
+        with pytest.raises(ValueError, match=match):
+            af.load_recording(path, **keys)
+
+
+def test_a_nan_sample_is_refused_naming_the_file(tmp_path, text_parser) -> None:
+    lines = rows()
+    lines[4] = f"{T[4]:.10g},NaN,{Y[4]:.10g}\n"
+    path = tmp_path / "nan.csv"
+    path.write_text("time,force,displacement\n" + "".join(lines))
+    with pytest.raises(ValueError, match=r"force must be finite, got nan at sample 4 \(nan.csv: force 'force'"):
+        af.load_recording(path)
+
+
+# -- item 2: a hand-built Recording ----------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [({"displacement": np.ones(15)}, "displacement samples must be as many as force's (16), got 15"),
+     ({"fs": 0.0}, "fs must be a finite number > 0 (Hz), got 0.0"),
+     ({"fs": -4000.0}, "fs must be a finite number > 0 (Hz), got -4000.0"),
+     ({"fs": math.nan}, "fs must be a finite number > 0 (Hz), got nan"),
+     ({"fs": "4000"}, "fs must be a finite number > 0 (Hz), got '4000'"),
+     ({"force": np.ones((16, 2))}, "force shape must be one-dimensional (samples,), got (16, 2)"),
+     ({"displacement": np.ones((16, 1))}, "displacement shape must be one-dimensional (samples,), got (16, 1)"),
+     ({"force": np.r_[np.ones(3), math.inf, np.ones(12)]}, "force must be finite, got inf at sample 3"),
+     ({"displacement": np.r_[np.ones(9), math.nan, np.ones(6)]}, "displacement must be finite, got nan at sample 9"),
+     ({"force": ["a"] * 16}, "force must be samples (a 1-D array of numbers), got list"),
+     ({"force": np.ones(1), "displacement": np.ones(1)}, "force samples must be at least 2, got 1"),
+     ({"source": 3}, "source must be a str, got 3")],
+)  # fmt: skip
+def test_a_hand_built_recording_is_checked_at_construction(kwargs, message) -> None:
+    """Was: every one of these built a Recording (fs NaN or -4000 Hz, channels of 16 and 15 samples, ...)."""
+    given = {"force": F, "displacement": Y, "fs": FS, **kwargs}
+    with pytest.raises(ValueError) as caught:
+        af.Recording(**given)
+    assert str(caught.value) == message
+
+
+def test_a_hand_built_recording_holds_float_arrays_and_a_float_fs() -> None:
+    rec = af.Recording([0, 1, 2], [0.0, 1e-6, 2e-6], 4000)
+    assert rec.force.dtype == np.float64 and rec.force.shape == (3,) and rec.force[2] == 2.0
+    assert isinstance(rec.fs, float) and rec.fs == 4000.0
+    assert rec == af.Recording(np.array([0.0, 1.0, 2.0]), np.array([0.0, 1e-6, 2e-6]), 4000.0)
