@@ -155,10 +155,11 @@ def sniff(path: Path) -> _Dialect:
             last = rows[start - 1] if start >= 1 else []
             filled = [f for f in last if f.strip()]
             if filled and all(_numeric(f, decimal_comma) for f in filled):  # numbers: not a header
-                raise ValueError(f"{path.name}: line {kept[start - 1] + 1} ({lines[kept[start - 1]].strip()!r}) is a "
-                                 f"row of numbers with a field empty or missing ({len(last)} fields, "
-                                 f"{len(last) - len(filled)} empty; the rows after it have {width} numbers): a lost "
-                                 "sample? amb_fast never guesses one: repair the row or cut the file there")  # fmt: skip
+                row = f"line {kept[start - 1] + 1} ({lines[kept[start - 1]].strip()!r})"
+                raise ValueError(f"{path.name}: {row} is a row of numbers with a field empty or missing "
+                                 f"({len(last)} fields, {len(last) - len(filled)} empty; the rows after it have "
+                                 f"{width} numbers): a lost sample? amb_fast never guesses one: repair the row or "
+                                 "cut the file there")  # fmt: skip
             # The header has the data's fields, or one more whose column is empty (LabVIEW's "Comment").
             before = [r[:width] for r in rows[max(0, start - 2) : start] if len(r) in (width, width + 1)]
             units_row = len(before) == 2 and all(
