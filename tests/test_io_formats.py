@@ -150,3 +150,67 @@ def test_a_hand_built_recording_holds_float_arrays_and_a_float_fs() -> None:
     assert rec.force.dtype == np.float64 and rec.force.shape == (3,) and rec.force[2] == 2.0
     assert isinstance(rec.fs, float) and rec.fs == 4000.0
     assert rec == af.Recording(np.array([0.0, 1.0, 2.0]), np.array([0.0, 1e-6, 2e-6]), 4000.0)
+
+
+# -- item 3: units in the header and the metadata --------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "header",
+    ["time,Force/N,Displacement/µm", "Zeit/s,Kraft/N,Weg/um", "Time in s,Force in N,Displacement in um",
+     "time s,force N,displacement um"],
+    ids=["slash", "slash-german", "in", "last-word"],
+)  # fmt: skip
+def test_a_unit_after_a_slash_or_as_the_last_word_is_applied(tmp_path, text_parser, header) -> None:
+    """Was: not found by the default names, and chosen by index or exact name the um column was read as m."""
+    path = tmp_path / "u.csv"
+    path.write_text(header + "\n" + "".join(rows(",", 1e6)), encoding="utf-8")
+    names = header.split(",")
+    check(af.load_recording(path, force=1, displacement=2, time=0))
+    by_name = af.load_recording(path, force=names[1].split("/")[0].split(" ")[0], displacement=names[2])
+    check(by_name)
+    assert f"{names[2]!r} (" in by_name.source
+
+
+def test_a_model_path_is_not_a_unit() -> None:
+    assert af.io.split_unit("Platform/Force") == ("Platform/Force", None)
+    assert af.io.split_unit("Model Root/Sensors/Gap_m") == ("Model Root/Sensors/Gap", "m")
+    assert af.io.split_unit("Velocity/m/s") == ("Velocity", "m/s")
+    assert af.io.split_unit("Coil A") == ("Coil A", None)  # a current's channel keeps its name: 'A' is not scaled
+
+
+LVM_HEAD = (
+    "LabVIEW Measurement\t\nWriter_Version\t2\nReader_Version\t2\nSeparator\tTab\nDecimal_Separator\t.\n"
+    "Multi_Headings\tNo\nX_Columns\tOne\nTime_Pref\tRelative\nDate\t2026/11/27\nTime\t10:00:00\n***End_of_Header***\t\n\n"
+    "Channels\t2\t\nSamples\t16\t16\t\nDate\t2026/11/27\t2026/11/27\t\nTime\t10:00:00\t10:00:00\t\n"
+    "Y_Unit_Label\t{units}\t\nX_Dimension\tTime\tTime\t\nX0\t0.0E+0\t0.0E+0\t\nDelta_X\t0.000250\t0.000250\t\n"
+    "***End_of_Header***\t\t\t\nX_Value\tforce\tdisplacement\tComment\n"
+)
+
+
+@pytest.mark.parametrize(("units", "y_scale"), [("Newtons\tMeters", 1.0), ("N\tmm", 1e3), ("N\tum", 1e6)])
+def test_labviews_unit_labels_scale_the_channels(tmp_path, text_parser, units, y_scale) -> None:
+    """Was: LabVIEW's Y_Unit_Label line was skipped with the metadata: a displacement in mm read as m."""
+    path = tmp_path / "rig.lvm"
+    path.write_text(LVM_HEAD.format(units=units) + "".join(rows("\t", y_scale)))
+    check(af.load_recording(path))
+
+
+def test_labviews_volts_or_a_label_per_column_missing_are_refused(tmp_path, text_parser) -> None:
+    path = tmp_path / "v.lvm"
+    path.write_text(LVM_HEAD.format(units="Volts\tVolts") + "".join(rows("\t")))
+    with pytest.raises(ValueError, match=r"the force channel 'force \[V\]' has unit 'V'"):
+        af.load_recording(path)
+    path.write_text(LVM_HEAD.format(units="Newtons") + "".join(rows("\t")))
+    with pytest.raises(ValueError, match=r"line 'Y_Unit_Label\\tNewtons' gives 1 units for the 2 columns "
+                                         r"\['force', 'displacement'\]: which unit is whose is not known"):  # fmt: skip
+        af.load_recording(path)
+
+
+def test_a_units_line_above_the_header_scales_and_a_units_id_does_not(tmp_path, text_parser) -> None:
+    """Was: "Units;s;N;um" above the header was skipped as metadata: um read as m."""
+    path = tmp_path / "daq.csv"
+    path.write_text("Device;DAQ 7\nUnits;s;N;um\nTime;Force;Displacement\n" + "".join(rows(";", 1e6)))
+    check(af.load_recording(path))
+    path.write_text("Device;DAQ 7\nUnit;B2\nTime;Force;Displacement\n" + "".join(rows(";")))  # the rig's unit B2
+    check(af.load_recording(path))

@@ -19,16 +19,31 @@ UNITS = {
     "s": ("time", 1.0), "ms": ("time", 1e-3), "us": ("time", 1e-6), "µs": ("time", 1e-6), "μs": ("time", 1e-6),
     "sec": ("time", 1.0), "msec": ("time", 1e-3), "usec": ("time", 1e-6),
 }  # fmt: skip
+# Units a DAQ writes that amb_fast does not scale: recognised (in a units row, after a slash) so a channel in
+# one of them is refused naming its unit.
+OTHER_UNITS = frozenset({"v", "mv", "a", "ma", "g", "lbf", "in", "mil", "mils", "hz", "rpm", "pa", "bar", "%", "-",
+                         "°c", "degc", "k", "w", "rad", "deg", "m/s", "m/s^2", "m/s2"})  # fmt: skip
+UNIT_WORDS = OTHER_UNITS | set(UNITS)
 _UNIT_IN_NAME = re.compile(r"^(?P<name>.*?)\s*(?:\[(?P<b>[^\]]*)\]|\((?P<p>[^)]*)\))\s*$")
+_UNIT_WORD = re.compile(r"^(?P<name>\S.*?)(?:\s+in)?\s+(?P<u>\S+)$", re.IGNORECASE)
 _UNIT_SUFFIX = re.compile(r"^(?P<name>.+?)_(?P<u>kN|mN|N|mm|um|µm|μm|nm|m|ms|us|s)$")
 
 
 def split_unit(name: str) -> tuple[str, str | None]:
-    """``'force [kN]'`` -> ``('force', 'kN')``; ``'x_mm'`` -> ``('x', 'mm')``; ``'force'`` -> ``('force', None)``."""
+    """``'force [kN]'`` -> ``('force', 'kN')``; ``'x_mm'`` -> ``('x', 'mm')``; ``'Displacement/µm'`` ->
+    ``('Displacement', 'µm')`` (a known unit after a slash; ``'Platform/Force'`` is a model path, not a unit);
+    ``'Weg in mm'``, ``'Gap mm'`` -> ``('Weg', 'mm')``, ``('Gap', 'mm')`` (a unit of force, length or time as
+    the last word); ``'force'`` -> ``('force', None)``."""
     name = name.strip().strip('"').strip()
     match = _UNIT_IN_NAME.match(name)
     if match and match.group("name"):
         return match.group("name").strip(), next(u for u in match.group("b", "p") if u is not None).strip()
+    for slash in [j for j, c in enumerate(name) if c == "/" and j > 0]:  # the longest unit: 'v/m/s' is 'v' in m/s
+        if name[slash + 1 :].strip().casefold() in UNIT_WORDS:
+            return name[:slash].strip(), name[slash + 1 :].strip()
+    match = _UNIT_WORD.match(name)  # 'Weg in mm', 'Gap mm': a unit amb_fast scales, as the last word
+    if match and match.group("u").casefold() in UNITS:
+        return match.group("name"), match.group("u")
     match = _UNIT_SUFFIX.match(name)
     if match:
         return match.group("name"), match.group("u")

@@ -17,14 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from .._validate import require
-from ._channels import UNITS, _index, _scale, _time_index, fs_from_time, split_unit
+from ._channels import UNIT_WORDS, UNITS, _index, _scale, _time_index, fs_from_time, split_unit
 
 CHUNK_BYTES = 1 << 16  # text per chunk when reading: bounds the memory beyond the two channels
-# Units a DAQ writes in a units row that amb_fast does not scale: recognised so the row is not taken for the
-# header (the header row above it would be lost), and a channel in one of them is refused naming its unit.
-OTHER_UNITS = frozenset({"v", "mv", "a", "ma", "g", "lbf", "in", "mil", "mils", "hz", "rpm", "pa", "bar", "%", "-",
-                         "°c", "degc", "k", "w", "rad", "deg", "m/s", "m/s^2", "m/s2"})  # fmt: skip
-_UNIT_WORDS = OTHER_UNITS | set(UNITS)
 WIDE = 16  # columns beyond which text is parsed by numpy (smaller buffers) even with pandas installed
 
 
@@ -74,6 +69,47 @@ def stated_rate(lines: list[str], path: Path) -> tuple[float, str] | None:
             raise ValueError(f"{path.name} states two sampling rates: {found[0][1]!r} ({found[0][0]:.10g} Hz) and "
                              f"{line!r} ({fs:.10g} Hz); pass fs= (Hz; on the command line --fs)")  # fmt: skip
     return found[0] if found else None
+
+
+# A metadata line giving the channels' units: LabVIEW's "Y_Unit_Label<tab>Newtons<tab>Meters" (one per channel,
+# the X_Value columns left out), a DAQ's "Units;s;N;mm" (one per column).
+_UNIT_LINE = re.compile(r'^\s*"?(?P<key>y_unit_label|units?|einheit(?:en)?)"?\s*(?:[:=]\s*)?$', re.IGNORECASE)
+# LabVIEW/DAQmx unit names -> the symbols amb_fast scales (or refuses: V, lbf, ...)
+_UNIT_NAMES = {"newtons": "N", "newton": "N", "kilonewtons": "kN", "meters": "m", "metres": "m", "meter": "m",
+               "metre": "m", "millimeters": "mm", "millimetres": "mm", "micrometers": "um", "micrometres": "um",
+               "microns": "um", "seconds": "s", "volts": "V", "pounds": "lbf", "inches": "in"}  # fmt: skip
+
+
+def _labelled(names: list[str], above: list[str], delimiter: str | None, path: Path) -> list[str]:
+    """The column names with the units that a metadata line above the header gives (the last such line),
+    added as ``name [unit]`` where the name has none. A line whose units cannot be matched to the columns
+    one to one is refused: a channel's scale is never guessed."""
+    for line in reversed(above):
+        fields = _fields(line, delimiter)
+        match = _UNIT_LINE.match(fields[0]) if len(fields) > 1 else None
+        if not match:
+            continue
+        units = [u.strip() for u in fields[1:]]
+        while units and not units[-1]:
+            units.pop()
+        if match.group("key").lower() == "y_unit_label":
+            columns = [c for c, n in enumerate(names) if n.casefold() != "x_value"]
+        elif all(u.casefold() in UNIT_WORDS or u.casefold() in _UNIT_NAMES for u in units if u):
+            columns = list(range(len(names)))
+        else:
+            continue  # "Unit: B2" (a rig's unit), not units
+        if len(units) != len(columns):
+            raise ValueError(f"{path.name}: its metadata line {line.strip()!r} gives {len(units)} units for the "
+                             f"{len(columns)} columns {[names[c] for c in columns]}: which unit is whose is not "
+                             "known; write each unit in its column's name (force [N]) and delete the line, or "
+                             "rescale the columns to N and m and delete the line")  # fmt: skip
+        named = list(names)
+        for c, unit in zip(columns, units):
+            unit = _UNIT_NAMES.get(unit.casefold(), unit)
+            if unit and split_unit(names[c])[1] is None:
+                named[c] = f"{names[c]} [{unit}]"
+        return named
+    return names
 
 
 def _numeric(field: str, decimal_comma: bool) -> bool:
@@ -163,7 +199,7 @@ def sniff(path: Path) -> _Dialect:
             # The header has the data's fields, or one more whose column is empty (LabVIEW's "Comment").
             before = [r[:width] for r in rows[max(0, start - 2) : start] if len(r) in (width, width + 1)]
             units_row = len(before) == 2 and all(
-                u.strip().strip("[]()").lower() in _UNIT_WORDS for u in before[1] if u.strip()
+                u.strip().strip("[]()").lower() in UNIT_WORDS for u in before[1] if u.strip()
             )
             above = ""
             if units_row:  # a header, then a units row
@@ -177,6 +213,7 @@ def sniff(path: Path) -> _Dialect:
                 above = lines[kept[start - 1]].strip() if start >= 1 and 2 <= len(rows[start - 1]) < width else ""
             skip = kept[start]
             header = kept[start - (2 if units_row else 1)] if start >= 1 and not names[0] == "column 0" else skip
+            names = _labelled(names, lines[:header], delimiter, path)
             rate = stated_rate(lines[:header], path)
             percent = any(line.lstrip().startswith("%") for line in lines[skip:])
             body = [lines[j] for j in kept[start:]]
