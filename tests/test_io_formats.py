@@ -214,3 +214,98 @@ def test_a_units_line_above_the_header_scales_and_a_units_id_does_not(tmp_path, 
     check(af.load_recording(path))
     path.write_text("Device;DAQ 7\nUnit;B2\nTime;Force;Displacement\n" + "".join(rows(";")))  # the rig's unit B2
     check(af.load_recording(path))
+
+
+# -- item 3: MATLAB layouts ------------------------------------------------------------------------------------------
+
+
+def simulink_signals(labels: list[str], values: list[np.ndarray]) -> np.ndarray:
+    """signals(k).values/.label/.blockName as scipy writes a MATLAB struct array."""
+    signals = np.zeros(len(labels), dtype=[("values", object), ("dimensions", object), ("label", object),
+                                           ("blockName", object)])  # fmt: skip
+    for k, (label, value) in enumerate(zip(labels, values)):
+        signals[k] = (value, float(np.shape(value)[1]), label, f"rig/Scope{k}")
+    return signals
+
+
+@pytest.mark.parametrize(
+    "variables",
+    [{"data": {"time": T, "force": F, "displacement": Y}},
+     {"meas": {"fs": FS, "force": F[:, None], "displacement": Y[:, None], "note": "rig 3"}},
+     {"ScopeData": {"time": T[:, None], "blockName": "rig/Scope",
+                    "signals": simulink_signals(["force", "displacement"], [F[:, None], Y[:, None]])}}],
+    ids=["struct-of-channels", "struct-with-fs", "simulink-structure-with-time"],
+)  # fmt: skip
+def test_mat_structs_of_channels_are_recordings(tmp_path, variables) -> None:
+    """Was: "holds no channels: the file is empty or damaged" (every struct but dSPACE's was skipped)."""
+    from scipy.io import savemat
+
+    path = tmp_path / "s.mat"
+    savemat(path, variables)
+    rec = af.load_recording(path)
+    check(rec)
+    assert f"s.mat recording {next(iter(variables))!r}" in rec.source
+
+
+def test_mat_matrix_columns_and_a_simulink_signal_of_two_columns_are_channels(tmp_path) -> None:
+    """Simulink's 'Array' format [t, y1, y2], and a scope's two inputs logged as one signal. Was: refused
+    ("force must be a channel index 0..0")."""
+    from scipy.io import savemat
+
+    path = tmp_path / "a.mat"
+    savemat(path, {"ScopeData": np.column_stack([T, F, Y])})
+    check(af.load_recording(path, force="ScopeData column 2", displacement=2, time=0))
+    savemat(path, {"ScopeData": {"time": T, "signals": simulink_signals([""], [np.column_stack([F, Y])])}})
+    rec = af.load_recording(path, force=1, displacement="rig/Scope0 column 2")
+    check(rec)
+    assert "force 'rig/Scope0 column 1'" in rec.source
+
+
+def test_mat_without_a_readable_layout_names_each_variable(tmp_path) -> None:
+    """Was: "holds no channels: the file is empty or damaged"."""
+    from scipy.io import savemat
+
+    path = tmp_path / "c.mat"
+    cell = np.empty(2, dtype=object)
+    cell[:] = [F, Y]
+    savemat(path, {"channels": cell, "note": "rig 3", "meta": {"operator": "A. B."}})
+    with pytest.raises(ValueError, match=r"c.mat holds no channel amb_fast reads: its variables are 'channels' \(a "
+                                         r"cell array or other non-numeric value\), 'note' \(text\), 'meta' \(a struct "
+                                         r"without numeric fields\). amb_fast reads numeric variables"):  # fmt: skip
+        af.load_recording(path)
+
+
+def write_mat73_structs(path) -> None:
+    """A v7.3 file as MATLAB lays out a struct of channels and a Simulink 'Structure with time' (signals a
+    1x2 struct array: a reference per element into '#refs#'); column-major arrays, text as uint16 'char'."""
+    h5py = pytest.importorskip("h5py")
+    with h5py.File(path, "w", userblock_size=512) as f:
+        refs = f.create_group("#refs#")
+        data = f.create_group("data")
+        data.attrs["MATLAB_class"] = np.bytes_("struct")
+        for name, values in (("time", T), ("force", F), ("displacement", Y)):
+            data.create_dataset(name, data=values[None, :]).attrs["MATLAB_class"] = np.bytes_("double")
+        scope = f.create_group("ScopeData")
+        scope.attrs["MATLAB_class"] = np.bytes_("struct")
+        scope.create_dataset("time", data=T[None, :])
+        signals = scope.create_group("signals")
+        signals.attrs["MATLAB_class"] = np.bytes_("struct")
+        labels, values = [], []
+        for k, (label, v) in enumerate((("force", F), ("displacement", Y))):
+            text = refs.create_dataset(f"l{k}", data=np.array([[ord(c)] for c in label], np.uint16))
+            text.attrs["MATLAB_class"] = np.bytes_("char")
+            labels.append(text.ref)
+            values.append(refs.create_dataset(f"v{k}", data=v[None, :]).ref)
+        signals.create_dataset("label", data=np.array(labels, dtype=h5py.ref_dtype)[:, None])
+        signals.create_dataset("values", data=np.array(values, dtype=h5py.ref_dtype)[:, None])
+    with open(path, "r+b") as handle:
+        handle.write(b"MATLAB 7.3 MAT-file, Platform: GLNXA64, written by amb_fast's tests".ljust(116) + bytes(12))
+
+
+def test_mat73_structs_of_channels_and_simulink(tmp_path) -> None:
+    path = tmp_path / "s73.mat"
+    write_mat73_structs(path)
+    with pytest.raises(ValueError, match=r"holds several recordings \['ScopeData', 'data'\]"):
+        af.load_recording(path)
+    for name in ("data", "ScopeData"):
+        check(af.load_recording(path, recording=name))
