@@ -309,3 +309,52 @@ def test_mat73_structs_of_channels_and_simulink(tmp_path) -> None:
         af.load_recording(path)
     for name in ("data", "ScopeData"):
         check(af.load_recording(path, recording=name))
+
+
+# -- item 3: LabVIEW segments, and rows above the header -------------------------------------------------------------
+
+LVM_FILE = "LabVIEW Measurement\t\nWriter_Version\t2\nSeparator\tTab\nX_Columns\tOne\n***End_of_Header***\t\n\n"
+LVM_SEGMENT = ("Channels\t2\t\nSamples\t{n}\t{n}\t\nY_Unit_Label\tNewtons\t{unit}\t\nDelta_X\t0.000250\t0.000250\t\n"
+               "***End_of_Header***\t\t\t\nX_Value\tforce\tdisplacement\tComment\n")  # fmt: skip
+
+
+@pytest.mark.parametrize("cuts", [[8], [3, 9, 12], [300]], ids=["two", "four", "second-after-the-sniffed-lines"])
+def test_a_labview_file_with_a_header_per_segment_is_one_recording(tmp_path, text_parser, cuts) -> None:
+    """Write To Measurement File's "one header per segment". Was: the segments before the last one in the
+    first 256 lines dropped without a word (8 of 16 samples), or a later header refused as "not numeric"."""
+    t, f, y = (
+        (np.arange(600) / FS, np.sin(np.arange(600)), 1e-3 * np.cos(np.arange(600))) if cuts == [300] else (T, F, Y)
+    )
+    lines = [f"{a:.10g}\t{b:.10g}\t{c * 1e3:.10g}\n" for a, b, c in zip(t, f, y)]
+    text = LVM_FILE
+    for a, b in zip([0, *cuts], [*cuts, len(lines)]):
+        text += "\n" + LVM_SEGMENT.format(n=b - a, unit="mm") + "".join(lines[a:b])
+    path = tmp_path / "seg.lvm"
+    path.write_text(text)
+    rec = af.load_recording(path)
+    assert rec.fs == FS and rec.force.size == t.size
+    np.testing.assert_allclose(rec.force, f, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(rec.displacement, y, rtol=1e-9, atol=1e-18)
+
+
+def test_a_labview_segment_that_changes_units_or_columns_is_refused(tmp_path, text_parser) -> None:
+    lines = rows("\t")
+    path = tmp_path / "seg.lvm"
+    first = LVM_FILE + LVM_SEGMENT.format(n=8, unit="Meters") + "".join(lines[:8])
+    path.write_text(first + LVM_SEGMENT.format(n=8, unit="mm") + "".join(lines[8:]))
+    changed = r"seg.lvm: the LabVIEW segment at line 23 states 'Y_Unit_Label\\tNewtons\\tmm', the first "
+    with pytest.raises(ValueError, match=changed + r"'Y_Unit_Label\\tNewtons\\tMeters': another recording"):
+        af.load_recording(path)
+    path.write_text(first + LVM_SEGMENT.format(n=8, unit="Meters").replace("\tforce", "\tF") + "".join(lines[8:]))
+    with pytest.raises(ValueError, match=r"line 26 has the columns 'X_Value\\tF\\tdisplacement\\tComment'"):
+        af.load_recording(path)
+
+
+def test_rows_of_numbers_above_the_header_are_refused_not_dropped(tmp_path, text_parser) -> None:
+    """Two recordings joined: was read from the second header on, the first 8 rows dropped without a word."""
+    lines = rows()
+    path = tmp_path / "two.csv"
+    path.write_text("time,force,displacement\n" + "".join(lines[:8]) + "time,force,displacement\n" + "".join(lines[8:]))
+    with pytest.raises(ValueError, match=r"two.csv: rows of numbers at lines 2-9 come before line 10 "
+                                         r"\('time,force,displacement'\), where the table read starts"):  # fmt: skip
+        af.load_recording(path)

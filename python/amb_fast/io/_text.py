@@ -34,6 +34,7 @@ class _Dialect:
     rate: tuple[float, str] | None = None  # fs (Hz) stated in the metadata above the header, and that line
     above: str = ""  # with no header: the non-numeric row just above the data, when it has too few names
     encoding: str = "utf-8-sig"
+    drop: tuple[int, ...] = ()  # lines after `skip` that are not data: the headers of a LabVIEW file's later segments
 
 
 # A sampling rate or interval stated in the metadata: "Sample rate: 4000 Hz", "Sampling Frequency = 4 kHz",
@@ -175,7 +176,9 @@ def sniff(path: Path) -> _Dialect:
     encoding = text_encoding(path)
     with open(path, encoding=encoding, errors="replace", newline="") as handle:
         lines = [line.rstrip("\r\n") for line in itertools.islice(handle, 256)]
-    kept = [j for j, line in enumerate(lines) if line.strip() and not line.lstrip().startswith(("#", "%"))]
+    drop = _lvm_segment_headers(path, encoding) if lines and lines[0].startswith("LabVIEW Measurement") else ()
+    kept = [j for j, line in enumerate(lines) if line.strip() and not line.lstrip().startswith(("#", "%"))
+            and j not in drop]  # fmt: skip
     if not kept:
         raise ValueError(f"{path.name} has no rows of numbers")
     sample = "\n".join(lines[j] for j in kept[-16:])
@@ -213,14 +216,75 @@ def sniff(path: Path) -> _Dialect:
                 above = lines[kept[start - 1]].strip() if start >= 1 and 2 <= len(rows[start - 1]) < width else ""
             skip = kept[start]
             header = kept[start - (2 if units_row else 1)] if start >= 1 and not names[0] == "column 0" else skip
+            _no_data_above(rows, kept, lines, header, width, decimal_comma, path)
             names = _labelled(names, lines[:header], delimiter, path)
             rate = stated_rate(lines[:header], path)
             percent = any(line.lstrip().startswith("%") for line in lines[skip:])
             body = [lines[j] for j in kept[start:]]
             line_bytes = max(16, int(np.mean([len(line) + 1 for line in body])))
-            return _Dialect(delimiter, decimal_comma, names, skip, percent, line_bytes, rate, above, encoding)
+            return _Dialect(delimiter, decimal_comma, names, skip, percent, line_bytes, rate, above, encoding, drop)
     raise ValueError(f"{path.name}: could not read it as a table (rows of numbers separated by ',', ';', tabs or "
                      "blanks, after an optional header row naming the columns)")  # fmt: skip
+
+
+_END = "***End_of_Header***"
+_SAME = ("Channels", "Delta_X", "Y_Unit_Label", "X_Dimension")  # a segment changing one is another recording
+
+
+def _lvm_segment_headers(path: Path, encoding: str) -> tuple[int, ...]:
+    """The lines of a LabVIEW ``.lvm`` file's segment headers after its first data line (Write To Measurement
+    File's "one header per segment": the recording continues under each), to be skipped. Each must repeat
+    the first segment's column names, ``Channels``, ``Delta_X``, ``Y_Unit_Label`` and ``X_Dimension``: a
+    segment that changes one is another recording, refused."""
+    drop: list[int] = []
+    ends, first, names = 0, -1, ""
+    fixed: dict[str, str] = {}  # the first segment's lines that every segment must repeat
+    block: list[int] = []  # the lines of the segment header being read
+    closed = False  # its End_of_Header seen: next comes its column names line (or data)
+    with open(path, encoding=encoding, errors="replace", newline="") as handle:
+        for j, raw in enumerate(handle):
+            line = raw.strip()
+            data = line[:1] != "" and line[:1] in "0123456789+-."
+            if first < 0:  # the file header and the first segment's header
+                ends += line.startswith(_END)
+                if line.startswith(_SAME):
+                    fixed[line.split()[0]] = line
+                names = line if ends >= 2 and not names and line and not (data or line.startswith(_END)) else names
+                first = j if data and ends >= 2 else first
+                continue
+            if not line or line.startswith("#") or (data and not block):
+                continue
+            if closed:  # the segment's column names, or its data
+                if not data and line != names:
+                    raise ValueError(f"{path.name}: the LabVIEW segment at line {j + 1} has the columns {line!r}, "
+                                     f"the first {names!r}: another recording; cut the file there")  # fmt: skip
+                drop += block + ([] if data else [j])
+                block, closed = [], False
+            elif data:  # text among the data, not a segment header: left to the parser to refuse
+                block = []
+            else:
+                before = fixed.get(line.split()[0], "") if line.startswith(_SAME) else line
+                if line != before:
+                    raise ValueError(f"{path.name}: the LabVIEW segment at line {j + 1} states {line!r}, the first "
+                                     f"{before!r}: another recording; cut the file there")  # fmt: skip
+                block.append(j)
+                closed = line.startswith(_END)
+    return tuple(drop)
+
+
+def _no_data_above(
+    rows: list[list[str]], kept: list[int], lines: list[str], header: int, width: int, decimal_comma: bool, path: Path
+) -> None:
+    """Refuse rows of numbers as wide as the data above the header: the table would start after them and
+    they would be dropped without a word (two recordings in one file, a LabVIEW file with a header per
+    segment)."""
+    numeric = [kept[j] for j, r in enumerate(rows) if kept[j] < header and len(r) in (width, width + 1)
+               and all(_numeric(f, decimal_comma) for f in r[:width])]  # fmt: skip
+    if numeric:
+        raise ValueError(f"{path.name}: rows of numbers at lines {numeric[0] + 1}-{numeric[-1] + 1} come before "
+                         f"line {header + 1} ({lines[header].strip()!r}), where the table read starts: the file holds "
+                         "two tables (recordings joined, a LabVIEW header per segment); amb_fast drops no rows: "
+                         "cut it into one file per table")  # fmt: skip
 
 
 def _load_text(
@@ -283,7 +347,8 @@ def _chunks(path: Path, dialect: _Dialect, use: list[int]) -> Iterator[np.ndarra
     try:
         if pd is not None and not dialect.comment_percent and len(dialect.names) <= WIDE:
             with pd.read_csv(
-                path, sep=dialect.delimiter or r"\s+", header=None, skiprows=dialect.skip, usecols=sorted(set(use)),
+                path, sep=dialect.delimiter or r"\s+", header=None, usecols=sorted(set(use)),
+                skiprows=[*range(dialect.skip), *dialect.drop] if dialect.drop else dialect.skip,
                 chunksize=max(256, CHUNK_BYTES // dialect.line_bytes), dtype=np.float64,
                 decimal="," if dialect.decimal_comma else ".", comment="#", quotechar='"', skipinitialspace=True,
                 encoding=dialect.encoding, encoding_errors="replace", engine="c",
@@ -295,7 +360,13 @@ def _chunks(path: Path, dialect: _Dialect, use: list[int]) -> Iterator[np.ndarra
         with open(path, encoding=dialect.encoding, errors="replace", newline="") as handle:
             for _ in range(dialect.skip):
                 handle.readline()
+            line, drop = dialect.skip, set(dialect.drop)
             while block := handle.readlines(CHUNK_BYTES):
+                line += len(block)
+                if drop:
+                    block = [text for j, text in enumerate(block, line - len(block)) if j not in drop]
+                    if not block:
+                        continue
                 if dialect.decimal_comma:
                     block = [line.replace(",", ".") for line in block]
                 if any('"' in line for line in block):  # quoted numbers, in any row (not only the first or last)
