@@ -358,3 +358,59 @@ def test_rows_of_numbers_above_the_header_are_refused_not_dropped(tmp_path, text
     with pytest.raises(ValueError, match=r"two.csv: rows of numbers at lines 2-9 come before line 10 "
                                          r"\('time,force,displacement'\), where the table read starts"):  # fmt: skip
         af.load_recording(path)
+
+
+def test_a_clock_that_breaks_twice_names_the_first_break_and_the_worst_step(tmp_path, text_parser) -> None:
+    """Was: only the first break (a 0.3-sample jitter at row 100), not the 2-sample gap at row 300."""
+    t = np.arange(400) / FS
+    t[100:] += 0.3 / FS
+    t[300:] += 2.0 / FS
+    path = tmp_path / "clock.csv"
+    path.write_text("time,force,displacement\n" + "".join(f"{v:.17g},1.0,0.0\n" for v in t))
+    with pytest.raises(ValueError, match=r"at data row 100 \(t = 0.025075\) the step is 0.000325 against .*; the worst "
+                                         r"step, at data row 300, is 0.00075; cut the record"):  # fmt: skip
+        af.load_recording(path)
+
+
+# -- siblings: TDMS units and rates ----------------------------------------------------------------------------------
+
+
+def write_tdms(path, channels: list[tuple[str, np.ndarray, dict]]) -> None:
+    nptdms = pytest.importorskip("nptdms")
+    with nptdms.TdmsWriter(path) as writer:
+        writer.write_segment([nptdms.ChannelObject("run", n, v, properties=p) for n, v, p in channels])
+
+
+def test_tdms_unit_names_as_daqmx_writes_them_are_scaled(tmp_path) -> None:
+    """Was: refused ("has unit 'Millimeters'")."""
+    path = tmp_path / "u.tdms"
+    rate = {"wf_increment": 1 / FS}
+    write_tdms(path, [("Force", F, {**rate, "unit_string": "Newtons"}),
+                      ("Gap", Y * 1e3, {**rate, "unit_string": "Millimeters"})])  # fmt: skip
+    rec = af.load_recording(path, force="Force", displacement="Gap")
+    check(rec)
+    assert "displacement 'Gap [mm]' (mm -> m)" in rec.source
+
+
+def test_tdms_channels_at_different_rates_are_refused_and_a_slow_third_one_is_not(tmp_path) -> None:
+    """Was: the first channel's wf_increment taken for both (the displacement at 2 kHz read as 4 kHz)."""
+    path = tmp_path / "r.tdms"
+    write_tdms(path, [("force", F, {"wf_increment": 1 / FS}), ("displacement", Y, {"wf_increment": 2 / FS})])
+    with pytest.raises(ValueError, match=r"r.tdms: the channels 'force' 4000 Hz, 'displacement' 2000 Hz have "
+                                         r"different rates \(their wf_increment\)"):  # fmt: skip
+        af.load_recording(path)
+    write_tdms(path, [("temperature", np.ones(2), {"wf_increment": 0.1}), ("force", F, {"wf_increment": 1 / FS}),
+                      ("displacement", Y, {"wf_increment": 1 / FS})])  # fmt: skip
+    check(af.load_recording(path))
+
+
+def test_tdms_unit_string_contradicting_the_name_is_refused(tmp_path) -> None:
+    """Was: the name's unit (m) used and the unit_string (mm) ignored without a word."""
+    path = tmp_path / "c.tdms"
+    rate = {"wf_increment": 1 / FS}
+    write_tdms(path, [("force", F, rate), ("displacement [m]", Y * 1e3, {**rate, "unit_string": "mm"})])
+    with pytest.raises(ValueError, match=r"the channel 'displacement \[m\]' of group 'run' has unit_string 'mm', not "
+                                         r"the unit of its name"):  # fmt: skip
+        af.load_recording(path)
+    write_tdms(path, [("force", F, rate), ("displacement [m]", Y, {**rate, "unit_string": "Meters"})])  # agree
+    check(af.load_recording(path))

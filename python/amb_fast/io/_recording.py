@@ -188,7 +188,7 @@ def load_recording(
             raise ValueError(f"{path.name}: the force {f_name!r} has {sizes[0]} samples and the displacement "
                              f"{y_name!r} {sizes[1]}: choose two channels of the same recording, of at least 2 "
                              "samples")  # fmt: skip
-        names, (found, origin) = list(channels), _file_fs(channels, time, path)
+        names, (found, origin) = list(channels), _file_fs(channels, time, path, (f_name, y_name))
         f_values, y_values = np.array(f_values, dtype=float), np.array(y_values, dtype=float)  # scaled in place
     else:
         names, f_name, f_values, y_name, y_values, found, origin = _load_text(path, force, displacement, time)

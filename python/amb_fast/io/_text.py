@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .._validate import require
-from ._channels import UNIT_WORDS, UNITS, _index, _scale, _time_index, fs_from_time, split_unit
+from ._channels import UNIT_NAMES, UNIT_WORDS, UNITS, _index, _scale, _time_index, fs_from_time, split_unit, symbol
 
 CHUNK_BYTES = 1 << 16  # text per chunk when reading: bounds the memory beyond the two channels
 WIDE = 16  # columns beyond which text is parsed by numpy (smaller buffers) even with pandas installed
@@ -75,10 +75,6 @@ def stated_rate(lines: list[str], path: Path) -> tuple[float, str] | None:
 # A metadata line giving the channels' units: LabVIEW's "Y_Unit_Label<tab>Newtons<tab>Meters" (one per channel,
 # the X_Value columns left out), a DAQ's "Units;s;N;mm" (one per column).
 _UNIT_LINE = re.compile(r'^\s*"?(?P<key>y_unit_label|units?|einheit(?:en)?)"?\s*(?:[:=]\s*)?$', re.IGNORECASE)
-# LabVIEW/DAQmx unit names -> the symbols amb_fast scales (or refuses: V, lbf, ...)
-_UNIT_NAMES = {"newtons": "N", "newton": "N", "kilonewtons": "kN", "meters": "m", "metres": "m", "meter": "m",
-               "metre": "m", "millimeters": "mm", "millimetres": "mm", "micrometers": "um", "micrometres": "um",
-               "microns": "um", "seconds": "s", "volts": "V", "pounds": "lbf", "inches": "in"}  # fmt: skip
 
 
 def _labelled(names: list[str], above: list[str], delimiter: str | None, path: Path) -> list[str]:
@@ -95,7 +91,7 @@ def _labelled(names: list[str], above: list[str], delimiter: str | None, path: P
             units.pop()
         if match.group("key").lower() == "y_unit_label":
             columns = [c for c, n in enumerate(names) if n.casefold() != "x_value"]
-        elif all(u.casefold() in UNIT_WORDS or u.casefold() in _UNIT_NAMES for u in units if u):
+        elif all(u.casefold() in UNIT_WORDS or u.casefold() in UNIT_NAMES for u in units if u):
             columns = list(range(len(names)))
         else:
             continue  # "Unit: B2" (a rig's unit), not units
@@ -106,7 +102,7 @@ def _labelled(names: list[str], above: list[str], delimiter: str | None, path: P
                              "rescale the columns to N and m and delete the line")  # fmt: skip
         named = list(names)
         for c, unit in zip(columns, units):
-            unit = _UNIT_NAMES.get(unit.casefold(), unit)
+            unit = symbol(unit)
             if unit and split_unit(names[c])[1] is None:
                 named[c] = f"{names[c]} [{unit}]"
         return named
