@@ -26,6 +26,10 @@ CHUNK_LINES = 1 << 16  # rows per chunk when writing
 class Recording(ArrayRecord):
     """Force (N) and displacement (m) sampled at ``fs`` (Hz).
 
+    Checked when built, by hand or by :func:`load_recording`: 1-D channels of one length (at least 2
+    samples), finite samples, ``fs`` a finite rate > 0; a ``ValueError`` names the field and the value.
+    The channels are stored as float64 arrays and ``fs`` as a float.
+
     Attributes
     ----------
     force, displacement : ndarray
@@ -134,12 +138,15 @@ def load_recording(
     """Read force and displacement channels from a rig's file.
 
     Formats: CSV/TSV/``.txt``/``.dat`` and LabVIEW's ``.lvm`` (``,``, ``;``, tab or blank separated;
-    quoted headers; an optional units row; decimal commas; ``#`` comment lines; metadata lines before
-    the header, such as LabVIEW's ``***End_of_Header***`` blocks, skipped; no header: columns by index),
-    MATLAB ``.mat`` v4-v7 (scipy) and v7.3 (HDF5, needs h5py)
-    with top-level variables or dSPACE ControlDesk/TRACE exports (a struct with ``X.Data`` for time
-    and ``Y(k).Name`` / ``Y(k).Data`` per channel), and NI ``.tdms`` (needs ``amb_fast[tdms]``; each
-    group is a recording). Text files are read in chunks, keeping only the chosen columns.
+    quoted headers and numbers; an optional units row; decimal commas; UTF-8, UTF-16 or Windows-1252;
+    ``#`` comment lines; metadata lines before the header, such as LabVIEW's ``***End_of_Header***``
+    blocks (its ``Y_Unit_Label`` and a ``Units`` line give units), skipped; a LabVIEW header per segment;
+    no header: columns by index), MATLAB ``.mat`` v4-v7 (scipy) and v7.3 (HDF5, needs h5py)
+    with top-level variables (a matrix's columns as ``name column 1``, ...), structs of numeric fields,
+    dSPACE ControlDesk/TRACE exports (a struct with ``X.Data`` for time and ``Y(k).Name`` / ``Y(k).Data``
+    per channel) or Simulink "Structure with time" (``time``, ``signals(k).values`` / ``.label``), and NI
+    ``.tdms`` (needs ``amb_fast[tdms]``; each group is a recording). Text files are read in chunks,
+    keeping only the chosen columns.
 
     Parameters
     ----------
@@ -169,7 +176,8 @@ def load_recording(
     ValueError
         A channel or time column not found (the message lists the file's columns with their indices),
         ambiguous, in a unit that is not a force/length/time, a non-uniform clock, ``fs`` disagreeing with
-        the file's, or neither ``fs`` nor a time column.
+        the file's, or neither ``fs`` nor a time column; a row with a lost sample, rows of numbers above
+        the header, units that cannot be matched to the columns, a non-finite sample.
     """
     path = Path(path)
     require(path.is_file(), "path", str(path), "an existing file")
