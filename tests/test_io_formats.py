@@ -96,6 +96,14 @@ def test_usual_dialects_are_read_exactly(tmp_path, text_parser, header, sep, end
     check(af.load_recording(path))
 
 
+def test_comma_separated_quoted_decimal_commas(tmp_path, text_parser) -> None:
+    """ "0,00025","0,841","5,4e-07": was refused ("could not read it as a table")."""
+    path = tmp_path / "q.csv"
+    quoted = [",".join(f'"{v}"' for v in line.strip().split(",")).replace(".", ",") + "\n" for line in rows()]
+    path.write_text('"time","force","displacement"\n' + "".join(quoted))
+    check(af.load_recording(path))
+
+
 @pytest.mark.parametrize("broken", ["0.001,,1e-6", "0.001,0.5"], ids=["empty-field", "short-row"])
 def test_a_row_with_a_lost_sample_is_refused_not_taken_for_the_header(tmp_path, text_parser, broken) -> None:
     """Was: the broken row was taken for the header and the rows above it dropped: the default names were

@@ -181,8 +181,6 @@ def sniff(path: Path) -> _Dialect:
     for delimiter in [*(d for d in ("\t", ";", ",") if d in sample), None]:
         rows = [_fields(lines[j], delimiter) for j in kept]
         for decimal_comma in (False, True):
-            if decimal_comma and delimiter == ",":
-                continue
             start = _data_start(rows, decimal_comma)
             if start is None:
                 continue
@@ -358,16 +356,20 @@ def _chunks(path: Path, dialect: _Dialect, use: list[int]) -> Iterator[np.ndarra
                 handle.readline()
             line, drop = dialect.skip, set(dialect.drop)
             while block := handle.readlines(CHUNK_BYTES):
+                delimiter = dialect.delimiter
                 line += len(block)
                 if drop:
                     block = [text for j, text in enumerate(block, line - len(block)) if j not in drop]
                     if not block:
                         continue
+                if dialect.decimal_comma and delimiter == ",":  # "1,5","2,5": the quotes keep the fields apart
+                    block = [";".join(fields) + "\n" for fields in csv.reader(block, skipinitialspace=True)]
+                    delimiter = ";"
                 if dialect.decimal_comma:
                     block = [line.replace(",", ".") for line in block]
                 if any('"' in line for line in block):  # quoted numbers, in any row (not only the first or last)
                     block = [line.replace('"', "") for line in block]
-                chunk = np.loadtxt(block, delimiter=dialect.delimiter, usecols=use, ndmin=2, comments=("#", "%"),
+                chunk = np.loadtxt(block, delimiter=delimiter, usecols=use, ndmin=2, comments=("#", "%"),
                                    dtype=np.float64)  # fmt: skip
                 yield chunk
                 rows += chunk.shape[0]
