@@ -422,3 +422,34 @@ def test_tdms_unit_string_contradicting_the_name_is_refused(tmp_path) -> None:
         af.load_recording(path)
     write_tdms(path, [("force", F, rate), ("displacement [m]", Y, {**rate, "unit_string": "Meters"})])  # agree
     check(af.load_recording(path))
+
+
+# -- siblings: a rate stated in the metadata -------------------------------------------------------------------------
+
+
+def test_a_stated_rate_with_a_thousands_separator_is_not_read_as_a_decimal(tmp_path, text_parser) -> None:
+    """Was: "Sample rate: 10,000 Hz" gave fs 10 Hz, and "10 000 Hz" 10 Hz, without a word."""
+    body = "force,displacement\n" + "".join(f"{f:.10g},{y:.10g}\n" for f, y in zip(F, Y))
+    path = tmp_path / "r.csv"
+    path.write_text("Sample rate: 10,000 Hz\n" + body)
+    with pytest.raises(ValueError, match=r"r.csv: its metadata line 'Sample rate: 10,000 Hz' states 10 Hz or 10000 Hz "
+                                         r"\(a thousands separator or a decimal mark\?\): pass fs="):  # fmt: skip
+        af.load_recording(path)
+    assert af.load_recording(path, fs=10000.0).fs == 10000.0
+    with pytest.raises(ValueError, match=r"one of them, not 7000"):
+        af.load_recording(path, fs=7000.0)
+    timed = tmp_path / "t.csv"  # a time column settles it
+    timed.write_text("Sample rate: 4,000 Hz\ntime,force,displacement\n" + "".join(rows()))
+    check(af.load_recording(timed))
+    path.write_text("Sample rate: 10 000 Hz\n" + body)
+    with pytest.raises(ValueError, match=r"r.csv has neither 'fs' nor a time column"):
+        af.load_recording(path)
+
+
+@pytest.mark.parametrize("line", ["Abtastrate: 4000 Hz", "Sample period: 0.25 ms", "dt = 0,250 ms"])
+def test_more_ways_to_state_the_rate(tmp_path, text_parser, line) -> None:
+    path = tmp_path / "r.csv"
+    path.write_text(line + "\nforce,displacement\n" + "".join(f"{f:.10g},{y:.10g}\n" for f, y in zip(F, Y)))
+    rec = af.load_recording(path)
+    check(rec)
+    assert rec.fs_from == f"the metadata line {line!r} of r.csv"

@@ -199,7 +199,7 @@ def load_recording(
         names, (found, origin) = list(channels), _file_fs(channels, time, path, (f_name, y_name))
         f_values, y_values = np.array(f_values, dtype=float), np.array(y_values, dtype=float)  # scaled in place
     else:
-        names, f_name, f_values, y_name, y_values, found, origin = _load_text(path, force, displacement, time)
+        names, f_name, f_values, y_name, y_values, found, origin = _load_text(path, force, displacement, time, fs)
     described = []
     for values, channel, role, si in ((f_values, f_name, "force", "N"), (y_values, y_name, "displacement", "m")):
         scale = _scale(channel, role, path)

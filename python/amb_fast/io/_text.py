@@ -31,7 +31,8 @@ class _Dialect:
     skip: int  # lines before the first data line (comments, header, units row)
     comment_percent: bool = False  # '%' comment lines among the data
     line_bytes: int = 64  # typical length of a data line
-    rate: tuple[float, str] | None = None  # fs (Hz) stated in the metadata above the header, and that line
+    rate: tuple[tuple[float, ...], str] | None = None  # fs (Hz) stated above the header (two readings of
+    # "10,000": a thousands separator or a decimal mark), and that line
     above: str = ""  # with no header: the non-numeric row just above the data, when it has too few names
     encoding: str = "utf-8-sig"
     drop: tuple[int, ...] = ()  # lines after `skip` that are not data: the headers of a LabVIEW file's later segments
@@ -39,37 +40,52 @@ class _Dialect:
 
 # A sampling rate or interval stated in the metadata: "Sample rate: 4000 Hz", "Sampling Frequency = 4 kHz",
 # "Sample Rate (Hz),4000", LabVIEW's "Delta_X<tab>0.000250" (the interval, s).
-_RATE_KEY = r"sample[ _-]?rate|sampling[ _-]?(?:rate|frequency)|sample[ _-]?frequency|scan[ _-]?rate|fs"
-_STEP_KEY = r"delta[ _]?x|delta[ _]?t|sample[ _-]?interval|sampling[ _-]?interval|dt|time[ _-]?step"
+_RATE_KEY = (
+    r"sample[ _-]?rate|sampling[ _-]?(?:rate|frequency)|sample[ _-]?frequency|scan[ _-]?rate|fs"
+    r"|abtastrate|abtastfrequenz"
+)
+_STEP_KEY = (
+    r"delta[ _]?x|delta[ _]?t|sample[ _-]?interval|sampling[ _-]?interval|sample[ _-]?period|dt"
+    r"|time[ _-]?step|abtastintervall"
+)
 _RATE_LINE = re.compile(
     rf'^\s*"?(?P<key>{_RATE_KEY}|{_STEP_KEY})"?\s*(?:[\[(](?P<u1>[^\])]*)[\])])?\s*"?\s*[:=\t,;]\s*"?'
-    r"(?P<value>[0-9]+(?:[.,][0-9]*)?(?:[eE][-+]?[0-9]+)?)\s*(?P<u2>[a-zA-Zµμ/]+)?",
+    r"(?P<value>[0-9]+(?:[.,][0-9]*)?(?:[eE][-+]?[0-9]+)?)(?![0-9.,])(?!\s+[0-9])\s*(?P<u2>[a-zA-Zµμ/]+)?",
     re.IGNORECASE,
 )
 _RATE_UNITS = {"hz": 1.0, "khz": 1e3, "s/s": 1.0, "sa/s": 1.0, "samples/s": 1.0, "ks/s": 1e3, "/s": 1.0, "1/s": 1.0}
 _STEP_UNITS = {unit: factor for unit, (quantity, factor) in UNITS.items() if quantity == "time"}
 
 
-def stated_rate(lines: list[str], path: Path) -> tuple[float, str] | None:
+def stated_rate(lines: list[str], path: Path) -> tuple[tuple[float, ...], str] | None:
     """fs (Hz) that metadata lines state (a rate, or an interval such as LabVIEW's ``Delta_X``), with the line
-    it came from; None if none does; two lines stating different rates are an error naming both."""
-    found: list[tuple[float, str]] = []
+    it came from; None if none does; two lines stating different rates are an error naming both. A value
+    such as ``10,000`` or ``4.000`` (one to three digits, a separator, three digits) has two readings, a
+    thousands separator or a decimal mark: both are returned, for the time column or ``fs=`` to settle."""
+    found: list[tuple[tuple[float, ...], str]] = []
     for line in lines:
         match = _RATE_LINE.match(line)
         if not match:
             continue
-        value = float(match.group("value").replace(",", "."))
+        text = match.group("value")
+        values = [float(text.replace(",", "."))]
+        if re.fullmatch(r"[1-9][0-9]{0,2}[.,][0-9]{3}", text):
+            values.append(float(text.replace(",", "").replace(".", "")))
         unit = (match.group("u1") or match.group("u2") or "").strip().lower()
         interval = re.fullmatch(_STEP_KEY, match.group("key"), re.IGNORECASE) is not None
         factor = (_STEP_UNITS if interval else _RATE_UNITS).get(unit or ("s" if interval else "hz"))
-        if factor is None or value <= 0:
+        if factor is None or values[0] <= 0:
             continue  # a unit that is not a rate or an interval (e.g. "fs: 16 bit"): not the clock
-        found.append((1.0 / (value * factor) if interval else value * factor, line.strip()))
+        found.append((tuple(1.0 / (v * factor) if interval else v * factor for v in values), line.strip()))
     for fs, line in found[1:]:
-        if abs(fs - found[0][0]) > 1e-9 * fs:
-            raise ValueError(f"{path.name} states two sampling rates: {found[0][1]!r} ({found[0][0]:.10g} Hz) and "
-                             f"{line!r} ({fs:.10g} Hz); pass fs= (Hz; on the command line --fs)")  # fmt: skip
+        if not any(abs(a - b) <= 1e-9 * a for a in fs for b in found[0][0]):
+            raise ValueError(f"{path.name} states two sampling rates: {found[0][1]!r} ({_hz(found[0][0])}) and "
+                             f"{line!r} ({_hz(fs)}); pass fs= (Hz; on the command line --fs)")  # fmt: skip
     return found[0] if found else None
+
+
+def _hz(readings: tuple[float, ...]) -> str:
+    return " or ".join(f"{fs:.10g} Hz" for fs in readings)
 
 
 # A metadata line giving the channels' units: LabVIEW's "Y_Unit_Label<tab>Newtons<tab>Meters" (one per channel,
@@ -282,10 +298,11 @@ def _no_data_above(
 
 
 def _load_text(
-    path: Path, force: str | int, displacement: str | int, time: str | int | None
+    path: Path, force: str | int, displacement: str | int, time: str | int | None, given: float | None = None
 ) -> tuple[list[str], str, np.ndarray, str, np.ndarray, float | None, str]:
     """A text recording's column names, the force's and the displacement's name and values (in their units),
-    and fs (Hz) from its time column or metadata with where it came from (None, "" without either)."""
+    and fs (Hz) from its time column or metadata with where it came from (None, "" without either). ``given``
+    (``fs=``) settles a metadata rate with two readings."""
     dialect = sniff(path)
     names = dialect.names
     headerless = names[0] == "column 0"
@@ -316,13 +333,17 @@ def _load_text(
         found = fs_from_time(out[2], path, names[t_index], _scale(names[t_index], "time", path))
         origin = f"time column {names[t_index]!r}"
     if dialect.rate is not None:
-        stated, line = dialect.rate
-        if found is not None and abs(stated - found) > 1e-3 * found:
+        readings, line = dialect.rate
+        if found is not None and not any(abs(stated - found) <= 1e-3 * found for stated in readings):
             raise ValueError(f"{path.name}: its {origin} gives fs {found:.10g} Hz but its metadata line {line!r} "
-                             f"states {stated:.10g} Hz; pass fs= (Hz; on the command line --fs) and time=None to "
+                             f"states {_hz(readings)}; pass fs= (Hz; on the command line --fs) and time=None to "
                              "choose")  # fmt: skip
-        if found is None:
-            found, origin = stated, f"metadata line {line!r}"
+        if found is None and len(readings) > 1 and not any(abs(r - (given or 0.0)) <= 1e-3 * r for r in readings):
+            raise ValueError(f"{path.name}: its metadata line {line!r} states {_hz(readings)} (a thousands separator "
+                             "or a decimal mark?): pass fs= (Hz; on the command line --fs), one of them"
+                             + (f", not {given:g}" if given is not None else ""))  # fmt: skip
+        if found is None and len(readings) == 1:
+            found, origin = readings[0], f"metadata line {line!r}"
     return names, names[columns[0]], out[0], names[columns[1]], out[1], found, origin
 
 
