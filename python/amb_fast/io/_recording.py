@@ -53,6 +53,8 @@ class Recording(ArrayRecord):
     def __post_init__(self) -> None:
         """Checked once here, for a loaded and a hand-built recording alike: 1-D float channels of one length
         (at least 2 samples), finite samples, fs a finite rate > 0 (Hz)."""
+        require(isinstance(self.source, str), "source", self.source, "a str")
+        require(isinstance(self.fs_from, str), "fs_from", self.fs_from, "a str")
         where = f" ({self.source})" if self.source else ""
         force, displacement = (_samples(name, getattr(self, name)) for name in ("force", "displacement"))
         require(force.size >= 2, "force samples", force.size, f"at least 2{where}")
@@ -63,8 +65,6 @@ class Recording(ArrayRecord):
             if not finite.all():
                 bad = int(np.argmin(finite))
                 raise ValueError(f"{name} must be finite, got {float(values[bad])!r} at sample {bad}{where}")
-        require(isinstance(self.source, str), "source", self.source, "a str")
-        require(isinstance(self.fs_from, str), "fs_from", self.fs_from, "a str")
         # frozen: the checked arrays and float replace what was given
         object.__setattr__(self, "force", force)
         object.__setattr__(self, "displacement", displacement)

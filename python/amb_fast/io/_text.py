@@ -288,14 +288,13 @@ def _no_data_above(
     rows: list[list[str]], kept: list[int], lines: list[str], header: int, width: int, decimal_comma: bool, path: Path
 ) -> None:
     """Refuse rows of numbers as wide as the data above the header: the table would start after them and
-    they would be dropped without a word (two recordings in one file, a LabVIEW file with a header per
-    segment)."""
+    they would be dropped without a word (two recordings joined in one file)."""
     numeric = [kept[j] for j, r in enumerate(rows) if kept[j] < header and len(r) in (width, width + 1)
                and all(_numeric(f, decimal_comma) for f in r[:width])]  # fmt: skip
     if numeric:
         raise ValueError(f"{path.name}: rows of numbers at lines {numeric[0] + 1}-{numeric[-1] + 1} come before "
                          f"line {header + 1} ({lines[header].strip()!r}), where the table read starts: the file holds "
-                         "two tables (recordings joined, a LabVIEW header per segment); amb_fast drops no rows: "
+                         "two tables (recordings joined?); amb_fast drops no rows: "
                          "cut it into one file per table")  # fmt: skip
 
 
@@ -377,12 +376,12 @@ def _chunks(path: Path, dialect: _Dialect, use: list[int]) -> Iterator[np.ndarra
         with open(path, encoding=dialect.encoding, errors="replace", newline="") as handle:
             for _ in range(dialect.skip):
                 handle.readline()
-            line, drop = dialect.skip, set(dialect.drop)
+            read, drop = dialect.skip, set(dialect.drop)  # lines read; the segment headers to leave out
             while block := handle.readlines(CHUNK_BYTES):
                 delimiter = dialect.delimiter
-                line += len(block)
+                read += len(block)
                 if drop:
-                    block = [text for j, text in enumerate(block, line - len(block)) if j not in drop]
+                    block = [text for j, text in enumerate(block, read - len(block)) if j not in drop]
                     if not block:
                         continue
                 if dialect.decimal_comma and delimiter == ",":  # "1,5","2,5": the quotes keep the fields apart
