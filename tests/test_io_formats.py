@@ -446,7 +446,8 @@ def test_a_stated_rate_with_a_thousands_separator_is_not_read_as_a_decimal(tmp_p
         af.load_recording(path)
 
 
-@pytest.mark.parametrize("line", ["Abtastrate: 4000 Hz", "Sample period: 0.25 ms", "dt = 0,250 ms"])
+@pytest.mark.parametrize("line", ["Abtastrate: 4000 Hz", "Sample period: 0.25 ms", "dt = 0,250 ms",
+                                  "Sample rate: 4.000 kHz"])  # fmt: skip
 def test_more_ways_to_state_the_rate(tmp_path, text_parser, line) -> None:
     path = tmp_path / "r.csv"
     path.write_text(line + "\nforce,displacement\n" + "".join(f"{f:.10g},{y:.10g}\n" for f, y in zip(F, Y)))

@@ -61,9 +61,10 @@ _STEP_UNITS = {unit: factor for unit, (quantity, factor) in UNITS.items() if qua
 
 def stated_rate(lines: list[str], path: Path) -> tuple[tuple[float, ...], str] | None:
     """fs (Hz) that metadata lines state (a rate, or an interval such as LabVIEW's ``Delta_X``), with the line
-    it came from; None if none does; two lines stating different rates are an error naming both. A value
-    such as ``10,000`` or ``4.000`` (one to three digits, a separator, three digits) has two readings, a
-    thousands separator or a decimal mark: both are returned, for the time column or ``fs=`` to settle."""
+    it came from; None if none does; two lines stating different rates are an error naming both. A rate in
+    Hz such as ``10,000`` or ``4.000`` (one to three digits, a separator, three digits) has two readings, a
+    thousands separator or a decimal mark: both are returned, for the time column or ``fs=`` to settle
+    (``4.000 kHz`` is 4 kHz: a rate of MHz is not a DAQ's)."""
     found: list[tuple[tuple[float, ...], str]] = []
     for line in lines:
         match = _RATE_LINE.match(line)
@@ -71,13 +72,13 @@ def stated_rate(lines: list[str], path: Path) -> tuple[tuple[float, ...], str] |
             continue
         text = match.group("value")
         values = [float(text.replace(",", "."))]
-        if re.fullmatch(r"[1-9][0-9]{0,2}[.,][0-9]{3}", text):
-            values.append(float(text.replace(",", "").replace(".", "")))
         unit = (match.group("u1") or match.group("u2") or "").strip().lower()
         interval = re.fullmatch(_STEP_KEY, match.group("key"), re.IGNORECASE) is not None
         factor = (_STEP_UNITS if interval else _RATE_UNITS).get(unit or ("s" if interval else "hz"))
         if factor is None or values[0] <= 0:
             continue  # a unit that is not a rate or an interval (e.g. "fs: 16 bit"): not the clock
+        if not interval and factor == 1.0 and re.fullmatch(r"[1-9][0-9]{0,2}[.,][0-9]{3}", text):
+            values.append(float(text.replace(",", "").replace(".", "")))  # in Hz, "10,000" may be ten thousand
         found.append((tuple(1.0 / (v * factor) if interval else v * factor for v in values), line.strip()))
     for fs, line in found[1:]:
         if not any(abs(a - b) <= 1e-9 * a for a in fs for b in found[0][0]):
