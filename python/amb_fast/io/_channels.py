@@ -19,16 +19,42 @@ UNITS = {
     "s": ("time", 1.0), "ms": ("time", 1e-3), "us": ("time", 1e-6), "µs": ("time", 1e-6), "μs": ("time", 1e-6),
     "sec": ("time", 1.0), "msec": ("time", 1e-3), "usec": ("time", 1e-6),
 }  # fmt: skip
+# Units a DAQ writes that amb_fast does not scale: recognised (in a units row, after a slash) so a channel in
+# one of them is refused naming its unit.
+OTHER_UNITS = frozenset({"v", "mv", "a", "ma", "g", "lbf", "in", "mil", "mils", "hz", "rpm", "pa", "bar", "%", "-",
+                         "°c", "degc", "k", "w", "rad", "deg", "m/s", "m/s^2", "m/s2"})  # fmt: skip
+UNIT_WORDS = OTHER_UNITS | set(UNITS)
+# Unit names LabVIEW, DAQmx and TDMS files write -> the symbols amb_fast scales (or refuses: V, lbf, ...).
+UNIT_NAMES = {"newtons": "N", "newton": "N", "kilonewtons": "kN", "meters": "m", "metres": "m", "meter": "m",
+              "metre": "m", "millimeters": "mm", "millimetres": "mm", "micrometers": "um", "micrometres": "um",
+              "microns": "um", "seconds": "s", "volts": "V", "pounds": "lbf", "inches": "in"}  # fmt: skip
+
+
+def symbol(unit: str) -> str:
+    """``'Newtons'`` -> ``'N'``, ``'Millimeters'`` -> ``'mm'``; a symbol or an unknown name unchanged."""
+    return UNIT_NAMES.get(unit.strip().casefold(), unit.strip())
+
+
 _UNIT_IN_NAME = re.compile(r"^(?P<name>.*?)\s*(?:\[(?P<b>[^\]]*)\]|\((?P<p>[^)]*)\))\s*$")
+_UNIT_WORD = re.compile(r"^(?P<name>\S.*?)(?:\s+in)?\s+(?P<u>\S+)$", re.IGNORECASE)
 _UNIT_SUFFIX = re.compile(r"^(?P<name>.+?)_(?P<u>kN|mN|N|mm|um|µm|μm|nm|m|ms|us|s)$")
 
 
 def split_unit(name: str) -> tuple[str, str | None]:
-    """``'force [kN]'`` -> ``('force', 'kN')``; ``'x_mm'`` -> ``('x', 'mm')``; ``'force'`` -> ``('force', None)``."""
+    """``'force [kN]'`` -> ``('force', 'kN')``; ``'x_mm'`` -> ``('x', 'mm')``; ``'Displacement/µm'`` ->
+    ``('Displacement', 'µm')`` (a known unit after a slash; ``'Platform/Force'`` is a model path, not a unit);
+    ``'Weg in mm'``, ``'Gap mm'`` -> ``('Weg', 'mm')``, ``('Gap', 'mm')`` (a unit of force, length or time as
+    the last word); ``'force'`` -> ``('force', None)``."""
     name = name.strip().strip('"').strip()
     match = _UNIT_IN_NAME.match(name)
     if match and match.group("name"):
         return match.group("name").strip(), next(u for u in match.group("b", "p") if u is not None).strip()
+    for slash in [j for j, c in enumerate(name) if c == "/" and j > 0]:  # the longest unit: 'v/m/s' is 'v' in m/s
+        if name[slash + 1 :].strip().casefold() in UNIT_WORDS:
+            return name[:slash].strip(), name[slash + 1 :].strip()
+    match = _UNIT_WORD.match(name)  # 'Weg in mm', 'Gap mm': a unit amb_fast scales, as the last word
+    if match and match.group("u").casefold() in UNITS:
+        return match.group("name"), match.group("u")
     match = _UNIT_SUFFIX.match(name)
     if match:
         return match.group("name"), match.group("u")
@@ -49,7 +75,7 @@ def _scale(name: str, quantity: str, path: Path) -> float:
     if unit == "MN" and name.upper() == name:
         raise ValueError(f"{path.name}: the channel {name!r} has unit 'MN', written in capitals: meganewton or "
                          "millinewton? Write the unit as 'mN' or 'kN' (or rescale the column to N)")  # fmt: skip
-    kind, factor = ("force", 1e6) if unit == "MN" else UNITS.get(unit.lower(), (None, 1.0))
+    kind, factor = ("force", 1e6) if unit == "MN" else UNITS.get(symbol(unit).lower(), (None, 1.0))
     if kind != _QUANTITIES[quantity][0]:
         raise ValueError(f"{path.name}: the {quantity} channel {name!r} has unit {unit!r}; amb_fast needs "
                          f"one of {_QUANTITIES[quantity][1]} (scaled to SI), or rescale the column")  # fmt: skip
@@ -189,10 +215,12 @@ def fs_from_time(t: np.ndarray, path: Path, name: str, scale: float) -> float:
             a = BLOCK * int(np.argmax(worst))
             row = max(1, a + int(np.argmax(np.abs(t[a : a + BLOCK] - mean - step * k(a)))))
     if row > 0:
+        at = _worst_step(t, step)
+        also = f"; the worst step, at data row {at}, is {t[at] - t[at - 1]:.6g}" if at != row else ""
         raise ValueError(f"{path.name}: the time column {name!r} is not a uniform clock: at data row {row} "
                          f"(t = {t[row]:.10g}) the step is {t[row] - t[row - 1]:.6g} against {step:.6g} fitted over "
-                         f"all {n} rows (a gap, a repeat or a restart); cut the record before that row, or ignore "
-                         "the column with time=None and pass fs= (Hz; on the command line --fs)")  # fmt: skip
+                         f"all {n} rows (a gap, a repeat or a restart){also}; cut the record before that row, or "
+                         "ignore the column with time=None and pass fs= (Hz; on the command line --fs)")  # fmt: skip
     fs = 1.0 / (step * scale)
     # The fit's uncertainty with the times rounded to `quantum` (uniform errors): about q / n^1.5 in the step.
     spacing = float(np.spacing(max(abs(float(t[0])), abs(float(t[-1])))))
@@ -204,12 +232,35 @@ def fs_from_time(t: np.ndarray, path: Path, name: str, scale: float) -> float:
     return fs
 
 
-def _file_fs(channels: dict[str, np.ndarray], time: str | int | None, path: Path) -> tuple[float | None, str]:
-    """fs (Hz) from a file's ``fs`` variable or its time column, and where it came from."""
+def _worst_step(t: np.ndarray, step: float) -> int:
+    """The data row whose step from the one before is farthest from ``step`` (in blocks)."""
+    worst, row = -1.0, 1
+    for a in range(0, t.size - 1, BLOCK):
+        off = np.abs(np.diff(t[a : a + BLOCK + 1]) - step)
+        if off.size and float(off.max()) > worst:
+            worst, row = float(off.max()), a + int(np.argmax(off)) + 1
+    return row
+
+
+def _file_fs(
+    channels: dict[str, np.ndarray], time: str | int | None, path: Path, chosen: tuple[str, ...] = ()
+) -> tuple[float | None, str]:
+    """fs (Hz) from a file's ``fs`` variable or its time column, and where it came from. A TDMS group whose
+    channels have different rates has one per channel (NaN without one) in ``fs``: the ``chosen`` channels'
+    must agree."""
     names = list(channels)
     if "fs" in channels:
         where = "channels' wf_increment" if path.suffix.lower() == ".tdms" else "'fs' variable"  # TDMS: the waveform's
         value = np.ravel(channels["fs"])
+        if where != "'fs' variable" and value.size == len(names) - 1 and value.size > 1:  # TDMS: a rate per channel
+            rates = {name: value[names.index(name)] for name in chosen}
+            if len({float(r) for r in rates.values() if np.isfinite(r)}) > 1:
+                listed = ", ".join(f"{name!r} {rate:.10g} Hz" for name, rate in rates.items())
+                raise ValueError(f"{path.name}: the channels {listed} have different rates (their wf_increment): "
+                                 "force and displacement must be sampled together")  # fmt: skip
+            value = np.array([r for r in rates.values() if np.isfinite(r)][:1])
+            if value.size == 0:
+                return _file_fs({n: v for n, v in channels.items() if n != "fs"}, time, path)
         if value.size != 1 or not value[0] > 0 or not np.isfinite(value[0]):  # never a guess among several
             raise ValueError(f"{path.name}: its {where} must be one finite number > 0 (Hz), got {value.tolist()}")
         return float(value[0]), where

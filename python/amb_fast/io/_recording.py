@@ -26,6 +26,10 @@ CHUNK_LINES = 1 << 16  # rows per chunk when writing
 class Recording(ArrayRecord):
     """Force (N) and displacement (m) sampled at ``fs`` (Hz).
 
+    Checked when built, by hand or by :func:`load_recording`: 1-D channels of one length (at least 2
+    samples), finite samples, ``fs`` a finite rate > 0; a ``ValueError`` names the field and the value.
+    The channels are stored as float64 arrays and ``fs`` as a float.
+
     Attributes
     ----------
     force, displacement : ndarray
@@ -46,9 +50,39 @@ class Recording(ArrayRecord):
     source: str = ""
     fs_from: str = ""
 
+    def __post_init__(self) -> None:
+        """Checked once here, for a loaded and a hand-built recording alike: 1-D float channels of one length
+        (at least 2 samples), finite samples, fs a finite rate > 0 (Hz)."""
+        require(isinstance(self.source, str), "source", self.source, "a str")
+        require(isinstance(self.fs_from, str), "fs_from", self.fs_from, "a str")
+        where = f" ({self.source})" if self.source else ""
+        force, displacement = (_samples(name, getattr(self, name)) for name in ("force", "displacement"))
+        require(force.size >= 2, "force samples", force.size, f"at least 2{where}")
+        require(displacement.size == force.size, "displacement samples", displacement.size,
+                f"as many as force's ({force.size}){where}")  # fmt: skip
+        for name, values in (("force", force), ("displacement", displacement)):
+            finite = np.isfinite(values)
+            if not finite.all():
+                bad = int(np.argmin(finite))
+                raise ValueError(f"{name} must be finite, got {float(values[bad])!r} at sample {bad}{where}")
+        # frozen: the checked arrays and float replace what was given
+        object.__setattr__(self, "force", force)
+        object.__setattr__(self, "displacement", displacement)
+        object.__setattr__(self, "fs", real("fs", self.fs, "Hz", positive=True))
+
     def fs_note(self) -> str:
         """``"fs 4000.1 Hz (from the time column 'Time [s]' of rig.csv)"``: to add to an error about fs or f0."""
         return f"fs {self.fs:.10g} Hz" + (f" (from {self.fs_from})" if self.fs_from else "")
+
+
+def _samples(name: str, values: object) -> np.ndarray:
+    """``series`` with a value that is not numbers (text, None, objects) named too."""
+    try:
+        return series(name, values)
+    except (TypeError, ValueError) as error:
+        if "shape" in str(error):
+            raise
+        raise ValueError(f"{name} must be samples (a 1-D array of numbers), got {type(values).__name__}") from None
 
 
 def save_recording(
@@ -104,12 +138,15 @@ def load_recording(
     """Read force and displacement channels from a rig's file.
 
     Formats: CSV/TSV/``.txt``/``.dat`` and LabVIEW's ``.lvm`` (``,``, ``;``, tab or blank separated;
-    quoted headers; an optional units row; decimal commas; ``#`` comment lines; metadata lines before
-    the header, such as LabVIEW's ``***End_of_Header***`` blocks, skipped; no header: columns by index),
-    MATLAB ``.mat`` v4-v7 (scipy) and v7.3 (HDF5, needs h5py)
-    with top-level variables or dSPACE ControlDesk/TRACE exports (a struct with ``X.Data`` for time
-    and ``Y(k).Name`` / ``Y(k).Data`` per channel), and NI ``.tdms`` (needs ``amb_fast[tdms]``; each
-    group is a recording). Text files are read in chunks, keeping only the chosen columns.
+    quoted headers and numbers; an optional units row; decimal commas; UTF-8, UTF-16 or Windows-1252;
+    ``#`` comment lines; metadata lines before the header, such as LabVIEW's ``***End_of_Header***``
+    blocks (its ``Y_Unit_Label`` and a ``Units`` line give units), skipped; a LabVIEW header per segment;
+    no header: columns by index), MATLAB ``.mat`` v4-v7 (scipy) and v7.3 (HDF5, needs h5py)
+    with top-level variables (a matrix's columns as ``name column 1``, ...), structs of numeric fields,
+    dSPACE ControlDesk/TRACE exports (a struct with ``X.Data`` for time and ``Y(k).Name`` / ``Y(k).Data``
+    per channel) or Simulink "Structure with time" (``time``, ``signals(k).values`` / ``.label``), and NI
+    ``.tdms`` (needs ``amb_fast[tdms]``; each group is a recording). Text files are read in chunks,
+    keeping only the chosen columns.
 
     Parameters
     ----------
@@ -139,7 +176,8 @@ def load_recording(
     ValueError
         A channel or time column not found (the message lists the file's columns with their indices),
         ambiguous, in a unit that is not a force/length/time, a non-uniform clock, ``fs`` disagreeing with
-        the file's, or neither ``fs`` nor a time column.
+        the file's, or neither ``fs`` nor a time column; a row with a lost sample, rows of numbers above
+        the header, units that cannot be matched to the columns, a non-finite sample.
     """
     path = Path(path)
     require(path.is_file(), "path", str(path), "an existing file")
@@ -158,10 +196,10 @@ def load_recording(
             raise ValueError(f"{path.name}: the force {f_name!r} has {sizes[0]} samples and the displacement "
                              f"{y_name!r} {sizes[1]}: choose two channels of the same recording, of at least 2 "
                              "samples")  # fmt: skip
-        names, (found, origin) = list(channels), _file_fs(channels, time, path)
+        names, (found, origin) = list(channels), _file_fs(channels, time, path, (f_name, y_name))
         f_values, y_values = np.array(f_values, dtype=float), np.array(y_values, dtype=float)  # scaled in place
     else:
-        names, f_name, f_values, y_name, y_values, found, origin = _load_text(path, force, displacement, time)
+        names, f_name, f_values, y_name, y_values, found, origin = _load_text(path, force, displacement, time, fs)
     described = []
     for values, channel, role, si in ((f_values, f_name, "force", "N"), (y_values, y_name, "displacement", "m")):
         scale = _scale(channel, role, path)
@@ -172,4 +210,4 @@ def load_recording(
     where = path.name + (f" recording {name!r}" if name else "")
     source = f"{where}: {', '.join(described)}; fs {fs:.10g} Hz " + ("given" if found is None else f"from its {origin}")
     fs_from = "fs= (given)" if found is None else f"the {origin} of {where}"
-    return Recording(series("force", f_values), series("displacement", y_values), fs, source, fs_from)
+    return Recording(f_values, y_values, fs, source, fs_from)

@@ -6,10 +6,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ._channels import split_unit
+from ._channels import _scale, split_unit, symbol
 
 
 def _read_tdms(path: Path) -> dict[str, dict[str, np.ndarray]]:
+    """The groups' channels, named with their ``unit_string`` (``Gap [mm]``), and ``fs`` from their
+    ``wf_increment``: one rate, or one per channel (NaN without one) when they differ."""
     try:
         from nptdms import TdmsFile
     except ImportError as error:
@@ -19,15 +21,30 @@ def _read_tdms(path: Path) -> dict[str, dict[str, np.ndarray]]:
     with TdmsFile.open(path) as tdms:
         for group in tdms.groups():
             channels: dict[str, np.ndarray] = {}
-            fs = None
+            rates = []
             for channel in group.channels():
-                unit = channel.properties.get("unit_string")
-                name = channel.name if not unit or split_unit(channel.name)[1] else f"{channel.name} [{unit}]"
+                unit = symbol(str(channel.properties.get("unit_string") or ""))
+                named = split_unit(channel.name)[1]
+                if unit and named and _factor(unit, path) != _factor(named, path):  # never one of them guessed
+                    raise ValueError(f"{path.name}: the channel {channel.name!r} of group {group.name!r} has "
+                                     f"unit_string {unit!r}, not the unit of its name: which is right is not known; "
+                                     "correct one of them")  # fmt: skip
+                name = channel.name if not unit or named else f"{channel.name} [{unit}]"
                 channels[name] = np.asarray(channel[:], dtype=float)
                 increment = channel.properties.get("wf_increment")
-                if increment and fs is None:
-                    fs = np.asarray(1.0 / float(increment))
-            if fs is not None and "fs" not in channels:  # after the channels: their 0-based indices stay the file's
-                channels["fs"] = fs
+                rates.append(1.0 / float(increment) if increment else np.nan)
+            known = {rate for rate in rates if np.isfinite(rate)}
+            if known and "fs" not in channels:  # after the channels: their 0-based indices stay the file's
+                channels["fs"] = np.asarray(known.pop()) if len(known) == 1 else np.array(rates)
             groups[group.name] = channels
     return groups
+
+
+def _factor(unit: str, path: Path) -> tuple[str, float] | str:
+    """A unit's quantity and factor to SI, to compare two spellings (``m`` and ``meters``); else itself."""
+    for quantity in ("force", "displacement", "time"):
+        try:
+            return quantity, _scale(f"x [{unit}]", quantity, path)
+        except ValueError:
+            continue
+    return unit.casefold()
