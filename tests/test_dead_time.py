@@ -91,3 +91,37 @@ def test_sweep_over_dead_time_equals_single_runs_bit_for_bit(sphs) -> None:
 def test_bad_dead_time_is_refused(bad) -> None:
     with pytest.raises(ValueError, match="dead_time must be"):
         af.Rig(dead_time=bad)
+
+
+# A dead time of more than 1000 controller samples (a mistyped 1 s for 1 ms) is refused at once: each
+# sample is a state of the loop, and 4000 of them took minutes in the stability check before the run.
+LATE = replace(QUIET, dead_time=1.0)
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda: af.stability_margin(LATE, af.PID.paper()),
+        lambda: af.closed_loop_poles(LATE, af.PID.paper()),
+        lambda: af.simulate(LATE, af.PID.paper(), np.zeros(8)),
+        lambda: af.closed_loop_poles(af.RotorRig(af.RotorRig.example().rotor, LATE), af.PID.paper()),
+        lambda: af.campbell(af.RotorRig(af.RotorRig.example().rotor, LATE), af.PID.paper(), [0.0, 100.0]),
+    ],
+    ids=["stability_margin", "poles", "simulate", "rotor poles", "campbell"],
+)
+def test_a_dead_time_of_more_than_1000_samples_is_refused_naming_it(call) -> None:
+    with pytest.raises(ValueError, match=r"dead_time must be at most 1000 samples of the controller.*got 1"):
+        call()
+
+
+def test_1000_samples_of_dead_time_are_modelled() -> None:
+    poles = af.closed_loop_poles(replace(QUIET, dead_time=1000 * T), af.PID.paper())
+    assert poles.size > 1000 and np.all(np.isfinite(poles))
+
+
+def test_the_command_refuses_a_dead_time_of_1_s_before_the_run(capsys) -> None:
+    from cli_helpers import one_error_line, run
+
+    status, _, err = run(capsys, "run", "--dead-time", "1", "--periods", "2")
+    assert status == 2
+    assert "--dead-time must be at most 1000 samples of the controller" in one_error_line(err)

@@ -98,7 +98,12 @@ Propagator propagator(const Rig& rig, double h) {
 }
 
 DeadTime split_dead_time(double dead_time, double T) {
-    const int samples = static_cast<int>(std::floor(dead_time / T));
+    // Each whole sample of dead time is a state of the loop (its poles, steady start and solves grow as the
+    // cube): a bound keeps a mistyped dead time (1 s for 1 ms) from a run of hours, and the int exact.
+    const double late = std::floor(dead_time / T);
+    require(late <= max_dead_samples, "dead_time", dead_time,
+            "at most 1000 samples of the controller (1000 / fs s): each sample of dead time is a state of the loop");
+    const int samples = static_cast<int>(late);
     return {samples, std::max(0.0, dead_time - samples * T)};
 }
 

@@ -85,10 +85,16 @@ def plant_matrices(rig: Rig) -> tuple[np.ndarray, np.ndarray, list[str]]:
     return A, B, states
 
 
+MAX_DEAD_SAMPLES = 1000  # as the core's max_dead_samples: whole samples of dead time a loop models
+
+
 def split_dead_time(dead_time: float, fs: float) -> tuple[int, float]:
     """The dead time (s) as whole samples and the fraction of a sample left over (s), as the core splits it."""
     T = 1.0 / fs
-    samples = int(np.floor(dead_time / T))
+    late = np.floor(dead_time / T)
+    require(bool(late <= MAX_DEAD_SAMPLES), "dead_time", dead_time,
+            "at most 1000 samples of the controller (1000 / fs s): each sample of dead time is a state of the loop")  # fmt: skip
+    samples = int(late)
     return samples, max(0.0, dead_time - samples * T)
 
 

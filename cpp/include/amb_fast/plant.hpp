@@ -92,6 +92,8 @@ struct DeadTime {
     int samples;
     double fraction;
 };
+// The most whole samples of dead time a loop models (split_dead_time refuses more).
+constexpr double max_dead_samples = 1000.0;
 DeadTime split_dead_time(double dead_time, double T);
 
 // The exact one-sample map of the linear plant with the fractional part of the dead time: over
