@@ -92,8 +92,8 @@ def split_dead_time(dead_time: float, fs: float) -> tuple[int, float]:
     """The dead time (s) as whole samples and the fraction of a sample left over (s), as the core splits it."""
     T = 1.0 / fs
     late = np.floor(dead_time / T)
-    require(bool(late <= MAX_DEAD_SAMPLES), "dead_time", dead_time,
-            "at most 1000 samples of the controller (1000 / fs s): each sample of dead time is a state of the loop")  # fmt: skip
+    expected = "at most 1000 samples of the controller (1000 / fs s): each sample of dead time is a state of the loop"
+    require(bool(late <= MAX_DEAD_SAMPLES), "dead_time", dead_time, expected)
     samples = int(late)
     return samples, max(0.0, dead_time - samples * T)
 
