@@ -85,3 +85,17 @@ def test_a_free_block_frequency_may_start_near_nyquist() -> None:
                              free=["kp", "kd", "low_pass_freq"])  # fmt: skip
     assert not d.exact and d.stable
     assert 0 < d.params["low_pass_freq"] < 2000.0
+
+
+def test_a_design_held_back_by_stability_alone_warns_with_its_peak() -> None:
+    # A damping target of 0 cannot be met by a stable loop: without max_sensitivity the design ends on the
+    # stability boundary (|S| in the thousands), which used to come back without a word.
+    with pytest.warns(UserWarning, match=r"only stability held the design back: its \|S\| peak is .*zone D"):
+        design = af.design_controller(af.Rig.paper(), af.PID.paper(), freq=BAND, stiffness=6e4, damping=0.0)
+    assert design.constrained and design.stable
+    assert af.stability_margin(af.Rig.paper(), design.controller).peak > 5.0  # independent of the design's own
+
+
+def test_a_reachable_design_or_one_under_a_limit_does_not_warn() -> None:
+    af.design_controller(af.Rig.paper(), af.PID.paper(), freq=BAND, stiffness=6e4)  # warnings are errors here
+    af.design_controller(af.Rig.paper(), af.PID.paper(), freq=BAND, stiffness=6e4, damping=0.0, max_sensitivity=3.0)

@@ -460,6 +460,12 @@ def design_controller(
         limit = "" if max_sensitivity is None else f" with |S| <= {max_sensitivity:g}"
         warnings.warn(f"design_controller: no values of {', '.join(names)} make the loop stable{limit}; "
                       f"{design._reached()} (Design.feasible is False)", UserWarning, stacklevel=3)  # fmt: skip
+    elif max_sensitivity is None and constrained and iso_zone(design.peak_sensitivity) == "D":
+        # Without a limit, targets beyond reach pull the design onto the stability boundary (a damping target
+        # of 0 gives |S| ~ 2e4): stable on paper, unusable on a rig.
+        warnings.warn(f"design_controller: only stability held the design back: its |S| peak is "
+                      f"{design.peak_sensitivity:.4g} (ISO 14839-3 zone D, >= 5), barely stable; give "
+                      "max_sensitivity (e.g. 3, zone A) to keep a margin", UserWarning, stacklevel=3)  # fmt: skip
     return design
 
 
