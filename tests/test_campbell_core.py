@@ -168,3 +168,26 @@ def test_a_repeated_poles_copies_span_its_plane() -> None:
 def test_loop_modes_refuse_rows_of_another_size() -> None:
     with pytest.raises(ValueError, match="R"):
         _core.loop_modes(np.eye(3)[None], np.ones((2, 4)))
+
+
+def test_whirl_of_a_repeated_negative_real_pole_is_none() -> None:
+    """A repeated pole on the negative real axis (x and y alike, at the Nyquist frequency) has whirl 0, as a
+    simple one has: its samples alternate along a line, and its plane holds a forward and a backward shape
+    that sample alike. A repeated complex pole at the same bearing shapes reads one forward, one backward."""
+    R, F = np.eye(2), np.array([[0.0, 2j], [-2j, 0.0]])  # one bearing plane: x, y
+    shapes = np.array([[[1.0, 0.0], [0.0, 1.0]]] * 2, dtype=complex)  # (speeds, N, poles): the x and y lines
+    values = np.array([[-0.3, -0.3], [0.3 + 0.4j, 0.3 + 0.4j]])
+    whirl = _campbell._whirl(values, R @ shapes, F)
+    np.testing.assert_array_equal(whirl, [[0, 0], [1, -1]])
+
+
+def test_campbell_orders_poles_by_frequency_then_half_plane_then_modulus() -> None:
+    """Per speed: |angle| (frequency) rising; equal frequencies (a conjugate pair, poles on the real axis):
+    the pole above the axis first, then rising modulus, whatever order the core found them in."""
+    c = af.campbell(af.RotorRig.example(), af.RotorRig.example_controller(), np.linspace(0.0, 6000.0, 25))
+    angle = np.angle(c.z)
+    keys = np.stack([np.abs(angle), -angle, np.abs(c.z)], axis=-1)  # (speeds, poles, 3)
+    for row in keys:
+        for earlier, later in zip(row[:-1], row[1:]):
+            assert tuple(earlier) <= tuple(later)
+    assert np.any((c.z.imag == 0) & (np.abs(angle[:, :1]) == 0))  # real poles tie on frequency: the check bites
