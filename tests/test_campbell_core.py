@@ -55,6 +55,30 @@ def test_speed_loops_are_scipys_expm_eigvals_and_solve(workers: int) -> None:
         np.testing.assert_allclose(x, steady, rtol=0, atol=1e-9 * np.abs(steady).max())
 
 
+@pytest.mark.parametrize("norm", [1e-3, 0.1, 0.5, 1.5, 4.0, 40.0])
+def test_speed_loops_exponential_at_every_pade_degree(norm: float) -> None:
+    """The core's exponential picks its Pade degree (3, 5, 7, 9, 13 and 13 with squarings) from the
+    augmented matrix's norm: at each, the loop is L + [Phi | Gamma(T) | Gamma(h)] P from scipy's expm."""
+    rng = np.random.default_rng(7)
+    A0, A1, B, holds, P, L = random_parts(rng)
+    n, k = B.shape
+    # The augmented matrix [[A0 T, B T], [0, 0]]'s 1-norm about ``norm`` (the balanced one is no larger).
+    size = max(np.abs(A0 * holds[0]).sum(axis=0).max(), np.abs(B * holds[0]).sum(axis=0).max())
+    A0, A1, B = A0 * norm / size, A1 * norm / size, B * norm / size
+    speeds = np.array([0.0, 0.5])
+    _, _, _, loops = _core.speed_loops(A0, A1, B, holds, P, L, speeds, loops=True)
+    for W, M in zip(speeds, loops):
+        blocks = []
+        for j, h in enumerate(holds):
+            aug = np.zeros((n + k, n + k))
+            aug[:n, :n], aug[:n, n:] = (A0 + W * A1) * h, B * h
+            E = scipy.linalg.expm(aug)
+            blocks += [E[:n, :n]] * (j == 0) + [E[:n, n:]]
+        expected = L.copy()
+        expected[:n] += np.hstack(blocks) @ P
+        np.testing.assert_allclose(M, expected, rtol=0, atol=1e-13 * np.abs(expected).max())
+
+
 def test_speed_loops_shapes_are_loop_modes() -> None:
     """With rows R the poles and shapes are those :func:`_core.loop_modes` gives for the same loops."""
     A0, A1, B, holds, P, L = random_parts(np.random.default_rng(4))

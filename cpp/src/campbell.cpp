@@ -4,7 +4,6 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
-#include <unsupported/Eigen/MatrixFunctions>
 #include <vector>
 
 #include "amb_fast/blocks.hpp"
@@ -256,6 +255,180 @@ __attribute__((target("avx2"))) void inverse_iteration_avx2(const double* H, Eig
 constexpr auto inverse_iteration_avx2 = inverse_iteration_portable;
 #endif
 
+// exp(X) for X = [[A, C], [0, S]] (e x e, row-major: A n x n, S the small block of the last e - n states, zero
+// for a hold's commands, the force's oscillator) by scaling and squaring with the Pade degree Higham (2005)
+// picks from X's 1-norm, as Eigen's MatrixFunctions does, on storage kept from one call to the next. Every
+// power and the quotient keep X's zero block, which the products and the solve skip (with any zero entry):
+// the squarings cost n^2 e + (e - n)^3, not e^3. Row-major loops over contiguous rows (vectorised where the
+// processor can; no reduction is reordered, so the same digits either way).
+struct Exponential {
+    explicit Exponential(Eigen::Index size)
+        : x(static_cast<std::size_t>(size * size)),
+          x2(x.size()),
+          x4(x.size()),
+          x6(x.size()),
+          x8(x.size()),
+          u(x.size()),
+          v(x.size()),
+          t(x.size()),
+          pivots(static_cast<std::size_t>(size)) {}
+    std::vector<double> x, x2, x4, x6, x8, u, v, t;
+    std::vector<Eigen::Index> pivots;
+};
+
+// c = a b for a, b zero in rows >= n, columns < n (e x e, row-major; c apart from a and b).
+AMB_FAST_ALWAYS_INLINE void block_product(const double* __restrict a, const double* __restrict b, double* __restrict c,
+                                          Eigen::Index e, Eigen::Index n) {
+    for (Eigen::Index i = 0; i < e; ++i) {
+        double* __restrict row = c + i * e;
+        for (Eigen::Index j = 0; j < e; ++j) row[j] = 0.0;
+        for (Eigen::Index k = i < n ? 0 : n; k < e; ++k) {
+            const double f = a[i * e + k];
+            if (f == 0.0) continue;
+            const double* __restrict from = b + k * e;
+            for (Eigen::Index j = k < n ? 0 : n; j < e; ++j) row[j] += f * from[j];
+        }
+    }
+}
+
+// out = sum_j w[j] p[j] + w0 I (count terms, e x e).
+AMB_FAST_ALWAYS_INLINE void combine(const double* const* p, const double* w, int count, double w0, double* out,
+                                    Eigen::Index e) {
+    for (Eigen::Index i = 0; i < e * e; ++i) {
+        double sum = w[0] * p[0][i];
+        for (int j = 1; j < count; ++j) sum += w[j] * p[j][i];
+        out[i] = sum;
+    }
+    for (Eigen::Index i = 0; i < e; ++i) out[i * e + i] += w0;
+}
+
+// E = exp(X): X in w.x (e x e, row-major, overwritten), E (e x e, row-major).
+AMB_FAST_ALWAYS_INLINE void exponential_kernel(Exponential& w, Eigen::Index e, Eigen::Index n, double* E) {
+    double *X = w.x.data(), *X2 = w.x2.data(), *X4 = w.x4.data(), *X6 = w.x6.data(), *X8 = w.x8.data();
+    double *U = w.u.data(), *V = w.v.data(), *T = w.t.data();
+    double norm = 0.0;
+    for (Eigen::Index j = 0; j < e; ++j) {
+        double sum = 0.0;
+        for (Eigen::Index i = 0; i < e; ++i) sum += std::abs(X[i * e + j]);
+        norm = std::max(norm, sum);
+    }
+    int squarings = 0;
+    if (norm >= 2.097847961257068) {  // [13/13] on X / 2^s, ||X / 2^s|| <= theta_13
+        std::frexp(norm / 5.371920351148152, &squarings);
+        squarings = std::max(squarings, 0);
+        for (Eigen::Index i = 0; i < e * e; ++i) X[i] = std::ldexp(X[i], -squarings);
+    }
+    block_product(X, X, X2, e, n);
+    if (norm < 1.495585217958292e-2) {  // [3/3]
+        static constexpr double b[] = {120.0, 60.0, 12.0, 1.0};
+        const double* p[] = {X2};
+        combine(p, b + 3, 1, b[1], T, e);
+        combine(p, b + 2, 1, b[0], V, e);
+    } else if (norm < 2.539398330063230e-1) {  // [5/5]
+        static constexpr double b[] = {30240.0, 15120.0, 3360.0, 420.0, 30.0, 1.0};
+        block_product(X2, X2, X4, e, n);
+        const double* p[] = {X4, X2};
+        const double odd[] = {b[5], b[3]}, even[] = {b[4], b[2]};
+        combine(p, odd, 2, b[1], T, e);
+        combine(p, even, 2, b[0], V, e);
+    } else if (norm < 9.504178996162932e-1) {  // [7/7]
+        static constexpr double b[] = {17297280.0, 8648640.0, 1995840.0, 277200.0, 25200.0, 1512.0, 56.0, 1.0};
+        block_product(X2, X2, X4, e, n);
+        block_product(X4, X2, X6, e, n);
+        const double* p[] = {X6, X4, X2};
+        const double odd[] = {b[7], b[5], b[3]}, even[] = {b[6], b[4], b[2]};
+        combine(p, odd, 3, b[1], T, e);
+        combine(p, even, 3, b[0], V, e);
+    } else if (norm < 2.097847961257068) {  // [9/9]
+        static constexpr double b[] = {17643225600.0, 8821612800.0, 2075673600.0, 302702400.0, 30270240.0,
+                                       2162160.0,     110880.0,     3960.0,       90.0,        1.0};
+        block_product(X2, X2, X4, e, n);
+        block_product(X4, X2, X6, e, n);
+        block_product(X6, X2, X8, e, n);
+        const double* p[] = {X8, X6, X4, X2};
+        const double odd[] = {b[9], b[7], b[5], b[3]}, even[] = {b[8], b[6], b[4], b[2]};
+        combine(p, odd, 4, b[1], T, e);
+        combine(p, even, 4, b[0], V, e);
+    } else {  // [13/13]
+        static constexpr double b[] = {64764752532480000.0,
+                                       32382376266240000.0,
+                                       7771770303897600.0,
+                                       1187353796428800.0,
+                                       129060195264000.0,
+                                       10559470521600.0,
+                                       670442572800.0,
+                                       33522128640.0,
+                                       1323241920.0,
+                                       40840800.0,
+                                       960960.0,
+                                       16380.0,
+                                       182.0,
+                                       1.0};
+        block_product(X2, X2, X4, e, n);
+        block_product(X4, X2, X6, e, n);
+        const double* p[] = {X6, X4, X2};
+        const double high_odd[] = {b[13], b[11], b[9]}, odd[] = {b[7], b[5], b[3]};
+        const double high_even[] = {b[12], b[10], b[8]}, even[] = {b[6], b[4], b[2]};
+        combine(p, high_odd, 3, 0.0, V, e);  // X6 (b13 X6 + b11 X4 + b9 X2) + b7 X6 + ... + b1 I
+        block_product(X6, V, X8, e, n);
+        combine(p, odd, 3, b[1], T, e);
+        for (Eigen::Index i = 0; i < e * e; ++i) T[i] += X8[i];
+        combine(p, high_even, 3, 0.0, U, e);  // X6 (b12 X6 + b10 X4 + b8 X2) + b6 X6 + ... + b0 I
+        block_product(X6, U, X8, e, n);
+        combine(p, even, 3, b[0], V, e);
+        for (Eigen::Index i = 0; i < e * e; ++i) V[i] += X8[i];
+    }
+    block_product(X, T, U, e, n);  // U = X (odd part / X)
+    // (V - U) E = V + U by LU with partial pivoting (row operations on E's rows)
+    for (Eigen::Index i = 0; i < e * e; ++i) {
+        const double denominator = V[i] - U[i];
+        E[i] = V[i] + U[i];
+        V[i] = denominator;
+    }
+    Eigen::Index* pivots = w.pivots.data();
+    for (Eigen::Index j = 0; j < e; ++j) {
+        Eigen::Index best = j;
+        for (Eigen::Index i = j + 1; i < e; ++i)
+            if (std::abs(V[i * e + j]) > std::abs(V[best * e + j])) best = i;
+        pivots[j] = best;
+        if (best != j)
+            for (Eigen::Index c = 0; c < e; ++c)
+                std::swap(V[j * e + c], V[best * e + c]), std::swap(E[j * e + c], E[best * e + c]);
+        const double pivot = V[j * e + j];
+        if (pivot == 0.0) throw std::runtime_error("matrix exponential: singular Pade denominator");
+        for (Eigen::Index i = j + 1; i < e; ++i) {
+            const double f = V[i * e + j] / pivot;
+            if (f == 0.0) continue;
+            for (Eigen::Index c = j + 1; c < e; ++c) V[i * e + c] -= f * V[j * e + c];
+            for (Eigen::Index c = 0; c < e; ++c) E[i * e + c] -= f * E[j * e + c];
+        }
+    }
+    for (Eigen::Index i = e - 1; i >= 0; --i) {
+        double* __restrict row = E + i * e;
+        for (Eigen::Index k = i + 1; k < e; ++k) {
+            const double f = V[i * e + k];
+            if (f == 0.0) continue;
+            const double* __restrict from = E + k * e;
+            for (Eigen::Index c = 0; c < e; ++c) row[c] -= f * from[c];
+        }
+        const double pivot = V[i * e + i];
+        for (Eigen::Index c = 0; c < e; ++c) row[c] /= pivot;
+    }
+    for (int k = 0; k < squarings; ++k) {
+        block_product(E, E, T, e, n);
+        std::copy(T, T + e * e, E);
+    }
+}
+
+void exponential_portable(Exponential& w, Eigen::Index e, Eigen::Index n, double* E) { exponential_kernel(w, e, n, E); }
+#if AMB_FAST_WIDE_LANES
+__attribute__((target("avx2"))) void exponential_avx2(Exponential& w, Eigen::Index e, Eigen::Index n, double* E) {
+    exponential_kernel(w, e, n, E);
+}
+#else
+constexpr auto exponential_avx2 = exponential_portable;
+#endif
+
 // One matrix's eigenvalues and shapes (loop_modes), with its storage kept from one matrix to the next.
 class Modes {
   public:
@@ -406,9 +579,10 @@ void speed_loops(const SpeedLoops& in, const double* values_p, Eigen::Index coun
         for (Eigen::Index i = 0; i < n + k; ++i)
             for (Eigen::Index j = 0; j < size; ++j) scaled(i, j) = (j < n + k ? d[j] : 1.0) / d[i];
     }
+    const auto exponential = simd_avx2() ? exponential_avx2 : exponential_portable;
     in_blocks(count, 8, workers, [&] {
-        return [&, size, augmented = Eigen::MatrixXd(size, size), E = Eigen::MatrixXd(size, size),
-                X = RowMatrixXd(n, n + k * H), M = RowMatrixXd(m, m), modes = Modes(m),
+        return [&, size, work = Exponential(size), E = RowMatrixXd(size, size), X = RowMatrixXd(n, n + k * H),
+                M = RowMatrixXd(m, m), modes = Modes(m),
                 x = Eigen::VectorXcd(m)](Eigen::Index begin, Eigen::Index end) mutable {
             for (Eigen::Index s = begin; s < end; ++s) {
                 const double p = values_p[s];
@@ -416,7 +590,7 @@ void speed_loops(const SpeedLoops& in, const double* values_p, Eigen::Index coun
                     const double h = in.holds[static_cast<std::size_t>(j)];
                     const bool drives = driven && j == 0;  // the force over the sample only
                     const Eigen::Index e = drives ? size : n + k;
-                    auto aug = augmented.topLeftCorner(e, e);
+                    Eigen::Map<RowMatrixXd> aug(work.x.data(), e, e), exp(E.data(), e, e);
                     aug.setZero();
                     aug.topLeftCorner(n, n) = (in.A0 + p * in.A1) * h;
                     aug.block(0, n, n, k) = in.B * h;
@@ -433,15 +607,15 @@ void speed_loops(const SpeedLoops& in, const double* values_p, Eigen::Index coun
                         if (size > 1.0) force = std::exp2(std::ceil(std::log2(size)));
                         aug.block(0, n + k, n, 2) /= force;
                     }
-                    E.topLeftCorner(e, e) = aug.exp();
-                    E.topLeftCorner(e, e).array() /= scaled.topLeftCorner(e, e).array();
-                    if (drives) E.block(0, n + k, n, 2) *= force;
-                    if (j == 0) X.leftCols(n) = E.topLeftCorner(n, n);
+                    exponential(work, e, n, exp.data());
+                    exp.array() /= scaled.topLeftCorner(e, e).array();
+                    if (drives) exp.block(0, n + k, n, 2) *= force;
+                    if (j == 0) X.leftCols(n) = exp.topLeftCorner(n, n);
                     if (drives) {  // G_p = Re G + j Im G, and the loop's drive [G_p; 0]
                         x.setZero();
-                        for (Eigen::Index i = 0; i < n; ++i) x[i] = cd(E(i, n + k), -E(i, n + k + 1));
+                        for (Eigen::Index i = 0; i < n; ++i) x[i] = cd(exp(i, n + k), -exp(i, n + k + 1));
                     }
-                    X.middleCols(n + j * k, k) = E.block(0, n, n, k);
+                    X.middleCols(n + j * k, k) = exp.block(0, n, n, k);
                 }
                 M = in.L;
                 M.topRows(n).noalias() += X * in.P;
