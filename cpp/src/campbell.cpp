@@ -439,6 +439,7 @@ class Modes {
           H(m, m),
           work(m, m),
           Q(m, m),
+          DQ(m, m),
           start(m, m),
           Yr(m, m),
           Yi(m, m),
@@ -466,34 +467,38 @@ class Modes {
         tiny = std::numeric_limits<double>::epsilon() * std::max(H.cwiseAbs().maxCoeff(), 1e-300);
         if (shapes == nullptr) return;
         const auto step = simd_avx2() ? inverse_iteration_avx2 : inverse_iteration_portable;
-        // Y's column i: eigenvalue i's vector of H (zero where none is wanted or it is the conjugate's)
+        // A shape for each eigenvalue off the real axis (a real one does not whirl), but not the conjugate's
         const auto wanted = [&](Eigen::Index i) {
             const bool conjugate = values[i].imag() < 0.0 && i > 0 && values[i - 1] == std::conj(values[i]);
-            return !conjugate && !(values[i].imag() == 0.0 && values[i].real() > 0.0);
+            return values[i].imag() != 0.0 && !conjugate;
         };
+        // Y's column c: the c-th wanted eigenvalue's vector of H (only those: the products below are m x m x c)
+        Eigen::Index c = 0;
         for (Eigen::Index i = 0; i < m; ++i) {
-            Yr.col(i).setZero();
-            Yi.col(i).setZero();
             if (!wanted(i)) continue;
             Eigen::Map<Eigen::VectorXd>(iteration.yr.data(), m) = start.col(i);
             Eigen::Map<Eigen::VectorXd>(iteration.yi.data(), m).setZero();
-            step(H.data(), m, values[i], values[i].imag() == 0.0, tiny, iteration);
-            Yr.col(i) = Eigen::Map<const Eigen::VectorXd>(iteration.yr.data(), m);
-            Yi.col(i) = Eigen::Map<const Eigen::VectorXd>(iteration.yi.data(), m);
+            step(H.data(), m, values[i], false, tiny, iteration);
+            Yr.col(c) = Eigen::Map<const Eigen::VectorXd>(iteration.yr.data(), m);
+            Yi.col(c) = Eigen::Map<const Eigen::VectorXd>(iteration.yi.data(), m);
+            ++c;
         }
-        // v = D Q y of unit norm and R v: the products for all eigenvalues at once
-        Vr.noalias() = Q * Yr;
-        Vi.noalias() = Q * Yi;
-        Vr = d.asDiagonal() * Vr;
-        Vi = d.asDiagonal() * Vi;
-        Sr.noalias() = *R * Vr;
-        Si.noalias() = *R * Vi;
+        // v = D Q y of unit norm and R v (D: powers of two, so D Q y is (D Q) y exactly)
+        DQ = d.asDiagonal() * Q;
+        Vr.leftCols(c).noalias() = DQ * Yr.leftCols(c);
+        Vi.leftCols(c).noalias() = DQ * Yi.leftCols(c);
         const Eigen::Index r = R->rows();
+        Sr.resize(r, m);
+        Si.resize(r, m);
+        Sr.leftCols(c).noalias() = *R * Vr.leftCols(c);
+        Si.leftCols(c).noalias() = *R * Vi.leftCols(c);
+        c = 0;
         for (Eigen::Index i = 0; i < m; ++i) {
             cd* shape = shapes + i;  // shape[j * m]: row j
             if (wanted(i)) {
-                const double norm = std::sqrt(Vr.col(i).squaredNorm() + Vi.col(i).squaredNorm());
-                for (Eigen::Index j = 0; j < r; ++j) shape[j * m] = cd(Sr(j, i), Si(j, i)) / norm;
+                const double norm = std::sqrt(Vr.col(c).squaredNorm() + Vi.col(c).squaredNorm());
+                for (Eigen::Index j = 0; j < r; ++j) shape[j * m] = cd(Sr(j, c), Si(j, c)) / norm;
+                ++c;
             } else if (values[i].imag() < 0.0) {  // the conjugate eigenvalue's vector is the conjugate vector
                 for (Eigen::Index j = 0; j < r; ++j) shape[j * m] = std::conj(shape[j * m - 1]);
             } else {
@@ -529,7 +534,7 @@ class Modes {
     Eigen::VectorXd d;
     Eigen::HessenbergDecomposition<Eigen::MatrixXd> hessenberg;
     RowMatrixXd H, work;
-    Eigen::MatrixXd Q, start;
+    Eigen::MatrixXd Q, DQ, start;
     Eigen::MatrixXd Yr, Yi, Vr, Vi, Sr, Si;  // the vectors of H, of A and R times them: a column per eigenvalue
     InverseIteration iteration;
 };

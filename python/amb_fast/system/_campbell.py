@@ -106,7 +106,7 @@ def _bearing_form(system: System, states: int) -> tuple[np.ndarray, np.ndarray]:
 def _whirl(values: np.ndarray, shapes: np.ndarray, F: np.ndarray) -> np.ndarray:
     """+1 forward, -1 backward, 0 none, per speed and pole: ``values`` (speeds, n), ``shapes`` (speeds, N, n)
     the bearing planes' displacements ``R v`` of each pole's unit eigenvector ``v`` (zero where not needed:
-    a pole on the positive real axis does not whirl).
+    a pole on the real axis does not whirl).
 
     A pole on the real axis has whirl 0, on the negative axis too: its samples alternate along a line
     (forward and backward whirl at the Nyquist frequency ``fs / 2`` sample alike), so it has no sense of turning.
