@@ -212,17 +212,23 @@ def speed_loops(rig: RotorRig, controller: ControllerMatrix, speeds: np.ndarray,
     return _core.speed_loops(*_loop_parts(rig, controller), speeds, workers=_workers(speeds.size), **options)
 
 
+def speed_grid(rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike) -> tuple[np.ndarray, ControllerMatrix]:
+    """What a diagram over the speeds of ``rig`` starts from: ``speeds`` checked as a 1-D array of finite speeds
+    (rad/s) and ``controller`` as the four axes' :class:`ControllerMatrix`; ``rig`` must be a :class:`RotorRig`."""
+    require(isinstance(rig, RotorRig), "rig", type(rig).__name__, "a RotorRig")
+    W = np.atleast_1d(np.asarray(speeds, dtype=float))
+    require(W.ndim == 1 and W.size >= 1 and bool(np.all(np.isfinite(W))), "speeds", speeds,
+            "a 1-D array of finite speeds, rad/s")  # fmt: skip
+    return W, controller_matrix(controller, 4)
+
+
 def campbell(rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike) -> Campbell:
     """The closed-loop poles of the sampled loop of ``rig`` at each of ``speeds`` (rad/s).
 
     Every pole (rotor, lags, controller) is kept; ``whirl`` marks those that move the rotor. Unstable
     speeds are reported (``onset_speed``), not raised: a Campbell diagram is how one finds them.
     """
-    require(isinstance(rig, RotorRig), "rig", type(rig).__name__, "a RotorRig")
-    W = np.atleast_1d(np.asarray(speeds, dtype=float))
-    require(W.ndim == 1 and W.size >= 1 and bool(np.all(np.isfinite(W))), "speeds", speeds,
-            "a 1-D array of finite speeds, rad/s")  # fmt: skip
-    spec = controller_matrix(controller, 4)
+    W, spec = speed_grid(rig, controller, speeds)
     fs = spec.fs
     parts = _loop_parts(rig, spec)
     R, F = _bearing_form(rig, parts[-1].shape[0])
