@@ -24,7 +24,7 @@ namespace {
 // (the previous speed's): the first step at each bottom row nn takes guess[nn] and its neighbour as its shifts
 // instead of the trailing 2 x 2's, so a pole that barely moved deflates in about one step. A poor guess
 // costs one step per row; the standard shifts follow, so convergence is as without.
-void hessenberg_eigenvalues(double* a, Eigen::Index n, cd* values, const cd* guess = nullptr) {
+AMB_FAST_ALWAYS_INLINE void hessenberg_eigenvalues_kernel(double* a, Eigen::Index n, cd* values, const cd* guess) {
     const auto at = [&](Eigen::Index i, Eigen::Index j) -> double& { return a[i * n + j]; };
     const auto sign = [](double x, double y) { return y >= 0.0 ? std::abs(x) : -std::abs(x); };
     const double eps = std::numeric_limits<double>::epsilon();
@@ -124,14 +124,22 @@ void hessenberg_eigenvalues(double* a, Eigen::Index n, cd* values, const cd* gue
                 p += s;
                 x = p / s, y = q / s, z = r / s;
                 q /= p, r /= p;
-                for (Eigen::Index j = k; j <= nn; ++j) {
-                    p = at(k, j) + q * at(k + 1, j);
-                    if (k != nn - 1) {
-                        p += r * at(k + 2, j);
-                        at(k + 2, j) -= p * z;
+                // the rows' update, contiguous (vectorised where the processor can), then the columns'
+                double *row0 = &at(k, 0), *row1 = &at(k + 1, 0), *row2 = k != nn - 1 ? &at(k + 2, 0) : nullptr;
+                if (row2 != nullptr) {
+                    for (Eigen::Index j = k; j <= nn; ++j) {
+                        double t3 = row0[j] + q * row1[j];
+                        t3 += r * row2[j];
+                        row2[j] -= t3 * z;
+                        row1[j] -= t3 * y;
+                        row0[j] -= t3 * x;
                     }
-                    at(k + 1, j) -= p * y;
-                    at(k, j) -= p * x;
+                } else {
+                    for (Eigen::Index j = k; j <= nn; ++j) {
+                        const double t2 = row0[j] + q * row1[j];
+                        row1[j] -= t2 * y;
+                        row0[j] -= t2 * x;
+                    }
                 }
                 const Eigen::Index last = std::min(nn, k + 3);
                 for (Eigen::Index i = l; i <= last; ++i) {
@@ -147,6 +155,18 @@ void hessenberg_eigenvalues(double* a, Eigen::Index n, cd* values, const cd* gue
         } while (l < nn - 1);
     }
 }
+
+void hessenberg_eigenvalues_portable(double* a, Eigen::Index n, cd* values, const cd* guess) {
+    hessenberg_eigenvalues_kernel(a, n, values, guess);
+}
+#if AMB_FAST_WIDE_LANES
+__attribute__((target("avx2"))) void hessenberg_eigenvalues_avx2(double* a, Eigen::Index n, cd* values,
+                                                                 const cd* guess) {
+    hessenberg_eigenvalues_kernel(a, n, values, guess);
+}
+#else
+constexpr auto hessenberg_eigenvalues_avx2 = hessenberg_eigenvalues_portable;
+#endif
 
 // Inverse iteration's storage: H - lambda I's LU factors, real and imaginary parts apart (row-major; the
 // row operations' multipliers and swaps), and the vector y.
@@ -454,14 +474,14 @@ class Modes {
 
     // A: the matrix (m x m, overwritten by its balanced form). shapes: R v for each eigenvalue (shape[j * m + i]),
     // or null for the eigenvalues only; `solvable`: keep what `solve` needs; guess: the previous (nearby)
-    // matrix's values, or null (hessenberg_eigenvalues).
+    // matrix's values, or null (hessenberg_eigenvalues_kernel).
     void compute(const RowMatrixXd* R, cd* values, cd* shapes, bool solvable, const cd* guess) {
         const Eigen::Index m = A.rows();
         balance(A, d);
         hessenberg.compute(A);
         H = hessenberg.matrixH();
         work = H;
-        hessenberg_eigenvalues(work.data(), m, values, guess);
+        (simd_avx2() ? hessenberg_eigenvalues_avx2 : hessenberg_eigenvalues_portable)(work.data(), m, values, guess);
         if (shapes == nullptr && !solvable) return;
         Q = hessenberg.matrixQ();
         tiny = std::numeric_limits<double>::epsilon() * std::max(H.cwiseAbs().maxCoeff(), 1e-300);
