@@ -116,9 +116,11 @@ def _whirl(values: np.ndarray, shapes: np.ndarray, F: np.ndarray) -> np.ndarray:
     whirl are the eigenvectors of the forward form relative to the amplitude (one forward, one backward), and
     those are used: for the 2x2 pencil ``(Fg, Dg)`` their signs are those of its two eigenvalues, whose product
     is ``det Fg / det Dg`` and whose sum is ``tr(Dg^-1 Fg)``."""
-    conj = shapes.conj()
-    # Plain products and sums over the N rows (not einsum: its three-operand complex forms are slow).
-    measure = (conj * np.matmul(F, shapes)).sum(axis=1).real
+    # p^H F p over F's few non-zero entries, elementwise on (speeds, n) arrays (not einsum, whose three-operand
+    # complex forms are slow, nor a stack of small matrix products)
+    measure = np.zeros(values.shape)
+    for i, j in zip(*np.nonzero(F)):
+        measure += (F[i, j] * shapes[:, i].conj() * shapes[:, j]).real
     amplitude = (shapes.real**2 + shapes.imag**2).sum(axis=1)
     angle = np.angle(values)
     # For Im s < 0 (the conjugate pole) the same orbit reads the other way round.
@@ -130,13 +132,14 @@ def _whirl(values: np.ndarray, shapes: np.ndarray, F: np.ndarray) -> np.ndarray:
     speed, k = np.nonzero(close)  # repeated poles come in pairs (x and y)
     if speed.size:
         first, second = order[speed, k], order[speed, k + 1]
-        a, b = shapes[speed, :, first], shapes[speed, :, second]  # (pairs, N) each
-        Fa, Fb = a @ F.T, b @ F.T
+        rows = np.moveaxis(shapes, 1, 0)  # (N, speeds, n): the sums over N below add whole rows (fast)
+        a, b = rows[:, speed, first], rows[:, speed, second]  # (N, pairs) each
+        Fa, Fb = F @ a, F @ b
         # The Hermitian 2x2 forms Dg = V^H V and Fg = V^H F V of V = [a, b], their off-diagonal entries averaged
-        d00, d11 = (a.real**2 + a.imag**2).sum(axis=1), (b.real**2 + b.imag**2).sum(axis=1)
-        d01 = (a.conj() * b).sum(axis=1)
-        f00, f11 = (a.conj() * Fa).sum(axis=1).real, (b.conj() * Fb).sum(axis=1).real
-        f01 = ((a.conj() * Fb).sum(axis=1) + (Fa.conj() * b).sum(axis=1)) / 2
+        d00, d11 = (a.real**2 + a.imag**2).sum(axis=0), (b.real**2 + b.imag**2).sum(axis=0)
+        d01 = (a.conj() * b).sum(axis=0)
+        f00, f11 = (a.conj() * Fa).sum(axis=0).real, (b.conj() * Fb).sum(axis=0).real
+        f01 = ((a.conj() * Fb).sum(axis=0) + (Fa.conj() * b).sum(axis=0)) / 2
         det_d = d00 * d11 - (d01.real**2 + d01.imag**2)
         det_f = f00 * f11 - (f01.real**2 + f01.imag**2)
         det_d = np.where(det_d != 0, det_d, 1e-300)
