@@ -168,6 +168,95 @@ __attribute__((target("avx2"))) void hessenberg_eigenvalues_avx2(double* a, Eige
 constexpr auto hessenberg_eigenvalues_avx2 = hessenberg_eigenvalues_portable;
 #endif
 
+// H = Q^T A Q upper Hessenberg by Householder reflections I - tau v v^T (Golub and Van Loan, 7.4.2): h (m x m,
+// row-major) holds A and becomes H; q (m x m, row-major, or null) becomes Q. v (m x m: reflector k in row k),
+// tau and w (m each): storage. Row-major loops over contiguous rows (vectorised where the processor can; the
+// only reductions, the products with v from the right, stay in order, so the same digits either way).
+AMB_FAST_ALWAYS_INLINE void hessenberg_kernel(double* __restrict h, Eigen::Index m, double* __restrict q,
+                                              double* __restrict v, double* __restrict tau, double* __restrict w) {
+    for (Eigen::Index k = 0; k + 2 < m; ++k) {
+        double* __restrict reflector = v + k * m;
+        double sigma = 0.0;
+        for (Eigen::Index i = k + 2; i < m; ++i) sigma += h[i * m + k] * h[i * m + k];
+        tau[k] = 0.0;
+        if (sigma == 0.0) continue;  // the column is reduced already
+        const double x0 = h[(k + 1) * m + k], mu = std::sqrt(x0 * x0 + sigma);
+        const double beta = x0 <= 0.0 ? x0 - mu : -sigma / (x0 + mu);  // v = x - mu e1 without cancellation
+        tau[k] = 2.0 * beta * beta / (sigma + beta * beta);
+        reflector[k + 1] = 1.0;
+        for (Eigen::Index i = k + 2; i < m; ++i) reflector[i] = h[i * m + k] / beta;
+        const double t = tau[k];
+        // from the left on rows k + 1.., columns k + 1.. (column k becomes mu e1): w = v^T A, A -= tau v w
+        for (Eigen::Index j = k + 1; j < m; ++j) w[j] = 0.0;
+        for (Eigen::Index i = k + 1; i < m; ++i) {
+            const double f = reflector[i];
+            const double* __restrict row = h + i * m;
+            for (Eigen::Index j = k + 1; j < m; ++j) w[j] += f * row[j];
+        }
+        for (Eigen::Index i = k + 1; i < m; ++i) {
+            const double f = t * reflector[i];
+            double* __restrict row = h + i * m;
+            for (Eigen::Index j = k + 1; j < m; ++j) row[j] -= f * w[j];
+        }
+        h[(k + 1) * m + k] = mu;
+        for (Eigen::Index i = k + 2; i < m; ++i) h[i * m + k] = 0.0;
+        // from the right on every row, columns k + 1..: A -= (A v) tau v^T; the sums (A v)_i in order, four rows
+        // side by side (independent chains: not one add's latency per term)
+        for (Eigen::Index i = 0; i < m; i += 4) {
+            const Eigen::Index rows = std::min<Eigen::Index>(4, m - i);
+            double sum[4] = {0.0, 0.0, 0.0, 0.0};
+            if (rows == 4) {
+                const double *r0 = h + i * m, *r1 = r0 + m, *r2 = r1 + m, *r3 = r2 + m;
+                for (Eigen::Index j = k + 1; j < m; ++j) {
+                    sum[0] += r0[j] * reflector[j];
+                    sum[1] += r1[j] * reflector[j];
+                    sum[2] += r2[j] * reflector[j];
+                    sum[3] += r3[j] * reflector[j];
+                }
+            } else {
+                for (Eigen::Index r = 0; r < rows; ++r)
+                    for (Eigen::Index j = k + 1; j < m; ++j) sum[r] += h[(i + r) * m + j] * reflector[j];
+            }
+            for (Eigen::Index r = 0; r < rows; ++r) {
+                const double f = t * sum[r];
+                double* __restrict row = h + (i + r) * m;
+                for (Eigen::Index j = k + 1; j < m; ++j) row[j] -= f * reflector[j];
+            }
+        }
+    }
+    if (q == nullptr) return;
+    // Q = H_0 H_1 ... applied to I from the last reflector back (each touches rows and columns k + 1.. only)
+    for (Eigen::Index i = 0; i < m * m; ++i) q[i] = 0.0;
+    for (Eigen::Index i = 0; i < m; ++i) q[i * m + i] = 1.0;
+    for (Eigen::Index k = m - 3; k >= 0; --k) {
+        if (tau[k] == 0.0) continue;
+        const double* __restrict reflector = v + k * m;
+        for (Eigen::Index j = k + 1; j < m; ++j) w[j] = 0.0;
+        for (Eigen::Index i = k + 1; i < m; ++i) {
+            const double f = reflector[i];
+            const double* __restrict row = q + i * m;
+            for (Eigen::Index j = k + 1; j < m; ++j) w[j] += f * row[j];
+        }
+        for (Eigen::Index i = k + 1; i < m; ++i) {
+            const double f = tau[k] * reflector[i];
+            double* __restrict row = q + i * m;
+            for (Eigen::Index j = k + 1; j < m; ++j) row[j] -= f * w[j];
+        }
+    }
+}
+
+void hessenberg_portable(double* h, Eigen::Index m, double* q, double* v, double* tau, double* w) {
+    hessenberg_kernel(h, m, q, v, tau, w);
+}
+#if AMB_FAST_WIDE_LANES
+__attribute__((target("avx2"))) void hessenberg_avx2(double* h, Eigen::Index m, double* q, double* v, double* tau,
+                                                     double* w) {
+    hessenberg_kernel(h, m, q, v, tau, w);
+}
+#else
+constexpr auto hessenberg_avx2 = hessenberg_portable;
+#endif
+
 // Inverse iteration's storage: H - lambda I's LU factors, real and imaginary parts apart (row-major; the
 // row operations' multipliers and swaps), and the vector y.
 struct InverseIteration {
@@ -455,7 +544,9 @@ class Modes {
     explicit Modes(Eigen::Index m)
         : A(m, m),
           d(m),
-          hessenberg(m),
+          reflectors(m, m),
+          tau(m),
+          row(m),
           H(m, m),
           work(m, m),
           Q(m, m),
@@ -478,12 +569,13 @@ class Modes {
     void compute(const RowMatrixXd* R, cd* values, cd* shapes, bool solvable, const cd* guess) {
         const Eigen::Index m = A.rows();
         balance(A, d);
-        hessenberg.compute(A);
-        H = hessenberg.matrixH();
+        H = A;
+        const bool vectors = shapes != nullptr || solvable;
+        (simd_avx2() ? hessenberg_avx2 : hessenberg_portable)(H.data(), m, vectors ? Q.data() : nullptr,
+                                                              reflectors.data(), tau.data(), row.data());
         work = H;
         (simd_avx2() ? hessenberg_eigenvalues_avx2 : hessenberg_eigenvalues_portable)(work.data(), m, values, guess);
         if (shapes == nullptr && !solvable) return;
-        Q = hessenberg.matrixQ();
         tiny = std::numeric_limits<double>::epsilon() * std::max(H.cwiseAbs().maxCoeff(), 1e-300);
         if (shapes == nullptr) return;
         const auto step = simd_avx2() ? inverse_iteration_avx2 : inverse_iteration_portable;
@@ -552,9 +644,11 @@ class Modes {
   private:
     double tiny = 0.0;
     Eigen::VectorXd d;
-    Eigen::HessenbergDecomposition<Eigen::MatrixXd> hessenberg;
+    RowMatrixXd reflectors;  // the Hessenberg reduction's reflectors (one per row), their tau, a row's storage
+    Eigen::VectorXd tau, row;
     RowMatrixXd H, work;
-    Eigen::MatrixXd Q, DQ, start;
+    RowMatrixXd Q, DQ;
+    Eigen::MatrixXd start;
     Eigen::MatrixXd Yr, Yi, Vr, Vi, Sr, Si;  // the vectors of H, of A and R times them: a column per eigenvalue
     InverseIteration iteration;
 };
