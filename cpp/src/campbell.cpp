@@ -245,6 +245,39 @@ AMB_FAST_ALWAYS_INLINE void hessenberg_kernel(double* __restrict h, Eigen::Index
     }
 }
 
+// z = Q z for hessenberg_kernel's Q = H_0 H_1 ... H_{m-3} (its reflectors v and tau): z m x width (row-major),
+// w (width) storage. Each reflector touches rows k + 1.. only; the same loops as Q's.
+AMB_FAST_ALWAYS_INLINE void reflect_kernel(const double* __restrict v, const double* __restrict tau, Eigen::Index m,
+                                           double* __restrict z, Eigen::Index width, double* __restrict w) {
+    for (Eigen::Index k = m - 3; k >= 0; --k) {
+        if (tau[k] == 0.0) continue;
+        const double* __restrict reflector = v + k * m;
+        for (Eigen::Index j = 0; j < width; ++j) w[j] = 0.0;
+        for (Eigen::Index i = k + 1; i < m; ++i) {
+            const double f = reflector[i];
+            const double* __restrict row = z + i * width;
+            for (Eigen::Index j = 0; j < width; ++j) w[j] += f * row[j];
+        }
+        for (Eigen::Index i = k + 1; i < m; ++i) {
+            const double f = tau[k] * reflector[i];
+            double* __restrict row = z + i * width;
+            for (Eigen::Index j = 0; j < width; ++j) row[j] -= f * w[j];
+        }
+    }
+}
+
+void reflect_portable(const double* v, const double* tau, Eigen::Index m, double* z, Eigen::Index width, double* w) {
+    reflect_kernel(v, tau, m, z, width, w);
+}
+#if AMB_FAST_WIDE_LANES
+__attribute__((target("avx2"))) void reflect_avx2(const double* v, const double* tau, Eigen::Index m, double* z,
+                                                  Eigen::Index width, double* w) {
+    reflect_kernel(v, tau, m, z, width, w);
+}
+#else
+constexpr auto reflect_avx2 = reflect_portable;
+#endif
+
 void hessenberg_portable(double* h, Eigen::Index m, double* q, double* v, double* tau, double* w) {
     hessenberg_kernel(h, m, q, v, tau, w);
 }
@@ -546,16 +579,12 @@ class Modes {
           d(m),
           reflectors(m, m),
           tau(m),
-          row(m),
+          row(2 * m),
           H(m, m),
           work(m, m),
           Q(m, m),
-          DQ(m, m),
           start(m, m),
-          Yr(m, m),
-          Yi(m, m),
-          Vr(m, m),
-          Vi(m, m),
+          Y(static_cast<std::size_t>(2 * m * m)),
           iteration(m) {
         // a start vector of its own per index i (column i), so that a repeated eigenvalue's copies differ
         for (Eigen::Index i = 0; i < m; ++i)
@@ -570,8 +599,7 @@ class Modes {
         const Eigen::Index m = A.rows();
         balance(A, d);
         H = A;
-        const bool vectors = shapes != nullptr || solvable;
-        (simd_avx2() ? hessenberg_avx2 : hessenberg_portable)(H.data(), m, vectors ? Q.data() : nullptr,
+        (simd_avx2() ? hessenberg_avx2 : hessenberg_portable)(H.data(), m, solvable ? Q.data() : nullptr,
                                                               reflectors.data(), tau.data(), row.data());
         work = H;
         (simd_avx2() ? hessenberg_eigenvalues_avx2 : hessenberg_eigenvalues_portable)(work.data(), m, values, guess);
@@ -584,32 +612,36 @@ class Modes {
             const bool conjugate = values[i].imag() < 0.0 && i > 0 && values[i - 1] == std::conj(values[i]);
             return values[i].imag() != 0.0 && !conjugate;
         };
-        // Y's column c: the c-th wanted eigenvalue's vector of H (only those: the products below are m x m x c)
-        Eigen::Index c = 0;
+        Eigen::Index c = 0;  // how many are wanted
+        for (Eigen::Index i = 0; i < m; ++i) c += wanted(i);
+        // Y (m x 2c, row-major): column c' the c'-th wanted eigenvalue's vector of H, real part, and column c + c'
+        // its imaginary part; then V = D Q Y by the reflectors (only these columns: m^2 c, no m x m Q)
+        const Eigen::Index width = 2 * c;
+        c = 0;
         for (Eigen::Index i = 0; i < m; ++i) {
             if (!wanted(i)) continue;
             Eigen::Map<Eigen::VectorXd>(iteration.yr.data(), m) = start.col(i);
             Eigen::Map<Eigen::VectorXd>(iteration.yi.data(), m).setZero();
             step(H.data(), m, values[i], false, tiny, iteration);
-            Yr.col(c) = Eigen::Map<const Eigen::VectorXd>(iteration.yr.data(), m);
-            Yi.col(c) = Eigen::Map<const Eigen::VectorXd>(iteration.yi.data(), m);
+            for (Eigen::Index a = 0; a < m; ++a) {
+                Y[static_cast<std::size_t>(a * width + c)] = iteration.yr[static_cast<std::size_t>(a)];
+                Y[static_cast<std::size_t>(a * width + width / 2 + c)] = iteration.yi[static_cast<std::size_t>(a)];
+            }
             ++c;
         }
-        // v = D Q y of unit norm and R v (D: powers of two, so D Q y is (D Q) y exactly)
-        DQ = d.asDiagonal() * Q;
-        Vr.leftCols(c).noalias() = DQ * Yr.leftCols(c);
-        Vi.leftCols(c).noalias() = DQ * Yi.leftCols(c);
+        (simd_avx2() ? reflect_avx2 : reflect_portable)(reflectors.data(), tau.data(), m, Y.data(), width, row.data());
+        Eigen::Map<RowMatrixXd> V(Y.data(), m, width);
+        V = d.asDiagonal() * V;
         const Eigen::Index r = R->rows();
-        Sr.resize(r, m);
-        Si.resize(r, m);
-        Sr.leftCols(c).noalias() = *R * Vr.leftCols(c);
-        Si.leftCols(c).noalias() = *R * Vi.leftCols(c);
+        if (S.size() < static_cast<std::size_t>(r * width)) S.resize(static_cast<std::size_t>(r * width));
+        Eigen::Map<RowMatrixXd> RV(S.data(), r, width);
+        RV.noalias() = *R * V;
         c = 0;
         for (Eigen::Index i = 0; i < m; ++i) {
             cd* shape = shapes + i;  // shape[j * m]: row j
             if (wanted(i)) {
-                const double norm = std::sqrt(Vr.col(c).squaredNorm() + Vi.col(c).squaredNorm());
-                for (Eigen::Index j = 0; j < r; ++j) shape[j * m] = cd(Sr(j, c), Si(j, c)) / norm;
+                const double norm = std::sqrt(V.col(c).squaredNorm() + V.col(c + width / 2).squaredNorm());
+                for (Eigen::Index j = 0; j < r; ++j) shape[j * m] = cd(RV(j, c), RV(j, c + width / 2)) / norm;
                 ++c;
             } else if (values[i].imag() < 0.0) {  // the conjugate eigenvalue's vector is the conjugate vector
                 for (Eigen::Index j = 0; j < r; ++j) shape[j * m] = std::conj(shape[j * m - 1]);
@@ -647,9 +679,9 @@ class Modes {
     RowMatrixXd reflectors;  // the Hessenberg reduction's reflectors (one per row), their tau, a row's storage
     Eigen::VectorXd tau, row;
     RowMatrixXd H, work;
-    RowMatrixXd Q, DQ;
+    RowMatrixXd Q;  // for `solve` only
     Eigen::MatrixXd start;
-    Eigen::MatrixXd Yr, Yi, Vr, Vi, Sr, Si;  // the vectors of H, of A and R times them: a column per eigenvalue
+    std::vector<double> Y, S;  // the wanted vectors of H, then of A (m x 2c), and R times them (r x 2c)
     InverseIteration iteration;
 };
 
