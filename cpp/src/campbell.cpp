@@ -23,8 +23,9 @@ namespace {
 // (x + j z, x - j z), z > 0. `guess` (n, or null): a nearby matrix's eigenvalues as this function gave them
 // (the previous speed's): the first step at each bottom row nn takes guess[nn] and its neighbour as its shifts
 // instead of the trailing 2 x 2's, so a pole that barely moved deflates in about one step. A poor guess
-// costs one step per row; the standard shifts follow, so convergence is as without.
-AMB_FAST_ALWAYS_INLINE void hessenberg_eigenvalues_kernel(double* a, Eigen::Index n, cd* values, const cd* guess) {
+// costs one step per row; the standard shifts follow, so convergence is as without. False if a row takes 60 steps
+// (the steps stall: the caller solves another way).
+AMB_FAST_ALWAYS_INLINE bool hessenberg_eigenvalues_kernel(double* a, Eigen::Index n, cd* values, const cd* guess) {
     const auto at = [&](Eigen::Index i, Eigen::Index j) -> double& { return a[i * n + j]; };
     const auto sign = [](double x, double y) { return y >= 0.0 ? std::abs(x) : -std::abs(x); };
     const double eps = std::numeric_limits<double>::epsilon();
@@ -66,7 +67,7 @@ AMB_FAST_ALWAYS_INLINE void hessenberg_eigenvalues_kernel(double* a, Eigen::Inde
                 nn -= 2;
                 continue;
             }
-            if (its == 60) throw std::runtime_error("eigenvalues did not converge");
+            if (its == 60) return false;
             if (its > 0 && its % 10 == 0) {  // an exceptional shift
                 t += x;
                 for (Eigen::Index i = 0; i <= nn; ++i) at(i, i) -= x;
@@ -154,15 +155,16 @@ AMB_FAST_ALWAYS_INLINE void hessenberg_eigenvalues_kernel(double* a, Eigen::Inde
             }
         } while (l < nn - 1);
     }
+    return true;
 }
 
-void hessenberg_eigenvalues_portable(double* a, Eigen::Index n, cd* values, const cd* guess) {
-    hessenberg_eigenvalues_kernel(a, n, values, guess);
+bool hessenberg_eigenvalues_portable(double* a, Eigen::Index n, cd* values, const cd* guess) {
+    return hessenberg_eigenvalues_kernel(a, n, values, guess);
 }
 #if AMB_FAST_WIDE_LANES
-__attribute__((target("avx2"))) void hessenberg_eigenvalues_avx2(double* a, Eigen::Index n, cd* values,
+__attribute__((target("avx2"))) bool hessenberg_eigenvalues_avx2(double* a, Eigen::Index n, cd* values,
                                                                  const cd* guess) {
-    hessenberg_eigenvalues_kernel(a, n, values, guess);
+    return hessenberg_eigenvalues_kernel(a, n, values, guess);
 }
 #else
 constexpr auto hessenberg_eigenvalues_avx2 = hessenberg_eigenvalues_portable;
@@ -602,7 +604,14 @@ class Modes {
         (simd_avx2() ? hessenberg_avx2 : hessenberg_portable)(H.data(), m, solvable ? Q.data() : nullptr,
                                                               reflectors.data(), tau.data(), row.data());
         work = H;
-        (simd_avx2() ? hessenberg_eigenvalues_avx2 : hessenberg_eigenvalues_portable)(work.data(), m, values, guess);
+        if (!(simd_avx2() ? hessenberg_eigenvalues_avx2 : hessenberg_eigenvalues_portable)(work.data(), m, values,
+                                                                                           guess)) {
+            // Francis steps can stall (a flexible rotor at standstill: pairs of equal poles): Eigen's solver, its
+            // own reduction and shifts and more steps, instead; rare, so its allocations do not matter
+            const Eigen::EigenSolver<Eigen::MatrixXd> solver(H, false);
+            if (solver.info() != Eigen::Success) throw std::runtime_error("eigenvalues did not converge");
+            for (Eigen::Index i = 0; i < m; ++i) values[i] = solver.eigenvalues()[i];
+        }
         if (shapes == nullptr && !solvable) return;
         tiny = std::numeric_limits<double>::epsilon() * std::max(H.cwiseAbs().maxCoeff(), 1e-300);
         if (shapes == nullptr) return;
