@@ -33,7 +33,8 @@ struct SpeedLoops {
 // bottom row the previous value's eigenvalues in the block: a fine grid's poles barely move), their shapes if
 // R is given (shapes: (count, r, m), as `loop_modes`) and the steady state if a drive is given (states:
 // (count, m)). The blocks are fixed, so the digits do not depend on the threads; a value's eigenvalues equal
-// its own alone to rounding. No allocation per value (the storage is kept per worker).
+// its own alone to rounding. No allocation per value (the storage is kept per worker), but where the QR steps
+// stall (rare: pairs of equal poles) and Eigen's eigenvalue solver takes over.
 void speed_loops(const SpeedLoops& in, const double* values_p, Eigen::Index count, int workers, double* loops,
                  std::complex<double>* values, std::complex<double>* shapes, std::complex<double>* states);
 
