@@ -67,5 +67,5 @@ void bind_campbell(py::module_& m) {
         },
         py::arg("stack"), py::arg("R"), py::arg("workers") = 1,
         "Eigenvalues (count, m) of each matrix of a stack (count, m, m) and R v (count, r, m) for their unit "
-        "eigenvectors v (zero for eigenvalues on the positive real axis); on `workers` threads, GIL released.");
+        "eigenvectors v (zero for real eigenvalues); on `workers` threads, GIL released.");
 }

@@ -9,6 +9,7 @@
 #include <functional>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -699,6 +700,31 @@ int main() {
                 speed_loops(bad, speeds.data(), 1, 1, nullptr, values.data(), nullptr, states.data());
             },
             "speed_loops refuses a P of the wrong size");
+    }
+
+    {  // speed_loops on the portable and the AVX2 kernels (exponential, QR, inverse iteration): the same digits
+        std::srand(11);
+        const Eigen::Index n = 9, k = 2, m = 13;
+        SpeedLoops in;
+        in.A0 = RowMatrixXd::Random(n, n) * 3000.0, in.A1 = RowMatrixXd::Random(n, n), in.B = RowMatrixXd::Random(n, k);
+        in.holds = {2.5e-4, 1.5e-4};
+        in.P = RowMatrixXd::Random(n + 2 * k, m) * 0.3, in.L = RowMatrixXd::Random(m, m) * 0.3;
+        in.L.topRows(n).setZero();
+        in.drive = Eigen::VectorXcd::Random(n);
+        in.R = RowMatrixXd::Random(3, m);
+        const std::vector<double> speeds = {0.0, 300.0, 600.0, 2000.0, 2100.0, 5000.0, 9000.0, 9100.0, 9200.0};
+        const auto count = static_cast<Eigen::Index>(speeds.size());
+        const auto run = [&](SimdKernel kernel) {
+            std::vector<double> loops(static_cast<std::size_t>(count * m * m));
+            std::vector<cd> values(static_cast<std::size_t>(count * m)), shapes(values.size() * 3),
+                states(values.size());
+            set_simd_kernel(kernel);
+            speed_loops(in, speeds.data(), count, 2, loops.data(), values.data(), shapes.data(), states.data());
+            set_simd_kernel(SimdKernel::automatic);
+            return std::make_tuple(loops, values, shapes, states);
+        };
+        check(run(SimdKernel::portable) == run(SimdKernel::avx2),
+              "speed_loops: the portable and AVX2 kernels give the same digits");
     }
 
     std::printf("%d passed, %d failed\n", passed, failed);

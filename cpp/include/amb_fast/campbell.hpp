@@ -33,16 +33,17 @@ struct SpeedLoops {
 // bottom row the previous value's eigenvalues in the block: a fine grid's poles barely move), their shapes if
 // R is given (shapes: (count, r, m), as `loop_modes`) and the steady state if a drive is given (states:
 // (count, m)). The blocks are fixed, so the digits do not depend on the threads; a value's eigenvalues equal
-// its own alone to rounding. Besides Eigen's exponential's temporaries, no allocation per value.
+// its own alone to rounding. No allocation per value (the storage is kept per worker), but where the QR steps
+// stall (rare: pairs of equal poles) and Eigen's eigenvalue solver takes over.
 void speed_loops(const SpeedLoops& in, const double* values_p, Eigen::Index count, int workers, double* loops,
                  std::complex<double>* values, std::complex<double>* shapes, std::complex<double>* states);
 
 // For each of `count` real m x m matrices (stack: row-major, one after the other): its eigenvalues
-// (values[k * m + i], balanced as `eigenvalues` does) and, for each eigenvalue with a non-zero angle, R v
-// for its eigenvector v of unit norm (shapes[(k * r + j) * m + i], R: r x m; zero for an eigenvalue on the
-// positive real axis). The eigenvalues warm-started as `speed_loops`' (the stack's order, blocks of 8). The
-// vectors by one step of inverse iteration on the Hessenberg form; a repeated eigenvalue's copies start from
-// different vectors, so that together they span its eigenvectors' plane.
+// (values[k * m + i], balanced as `eigenvalues` does) and, for each eigenvalue off the real axis, R v for
+// its eigenvector v of unit norm (shapes[(k * r + j) * m + i], R: r x m; zero for a real eigenvalue, which
+// does not whirl: a Campbell diagram needs none). The eigenvalues warm-started as `speed_loops`' (the stack's order,
+// blocks of 8). The vectors by one step of inverse iteration on the Hessenberg form; a repeated eigenvalue's copies
+// start from different vectors, so that together they span its eigenvectors' plane.
 void loop_modes(const double* stack, Eigen::Index count, Eigen::Index m, const RowMatrixXd& R, int workers,
                 std::complex<double>* values, std::complex<double>* shapes);
 

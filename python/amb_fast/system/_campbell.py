@@ -26,7 +26,7 @@ from ._rotor import RotorRig
 @dataclass(frozen=True, eq=False)
 class Campbell(ArrayRecord):
     """Closed-loop poles of the sampled loop at each speed; arrays (speeds, poles), poles sorted by
-    frequency at each speed.
+    frequency at each speed (equal frequencies: the pole above the real axis first, then by modulus).
 
     Attributes
     ----------
@@ -39,8 +39,9 @@ class Campbell(ArrayRecord):
     damping : ndarray
         Damping ratio ``-Re s / |s|`` (negative: unstable).
     whirl : ndarray
-        ``+1`` forward, ``-1`` backward, ``0`` for a pole without rotor motion at the bearings or without
-        oscillation (real ``s``).
+        ``+1`` forward, ``-1`` backward, ``0`` for a pole without rotor motion at the bearings or on the
+        real axis of ``z``: real ``s``, or a pole at the Nyquist frequency ``fs / 2`` (``z < 0``: its samples
+        alternate along a line, forward and backward whirl sample alike).
     onset_speed : float or None
         The lowest speed given at which the loop is unstable, rad/s; None if stable at every speed.
     fs : float
@@ -105,17 +106,25 @@ def _bearing_form(system: System, states: int) -> tuple[np.ndarray, np.ndarray]:
 def _whirl(values: np.ndarray, shapes: np.ndarray, F: np.ndarray) -> np.ndarray:
     """+1 forward, -1 backward, 0 none, per speed and pole: ``values`` (speeds, n), ``shapes`` (speeds, N, n)
     the bearing planes' displacements ``R v`` of each pole's unit eigenvector ``v`` (zero where not needed:
-    a pole on the positive real axis does not whirl).
+    a pole on the real axis does not whirl).
+
+    A pole on the real axis has whirl 0, on the negative axis too: its samples alternate along a line
+    (forward and backward whirl at the Nyquist frequency ``fs / 2`` sample alike), so it has no sense of turning.
 
     A repeated pole (x and y alike: any rotor at standstill, the parallel mode at any speed) has no
     mode shape of its own, only a plane of them (the core's two copies span it); within it the shapes of pure
     whirl are the eigenvectors of the forward form relative to the amplitude (one forward, one backward), and
     those are used: for the 2x2 pencil ``(Fg, Dg)`` their signs are those of its two eigenvalues, whose product
     is ``det Fg / det Dg`` and whose sum is ``tr(Dg^-1 Fg)``."""
-    measure = np.einsum("sim,ij,sjm->sm", shapes.conj(), F, shapes).real
-    amplitude = np.einsum("sim,sim->sm", shapes.conj(), shapes).real
+    # p^H F p over F's few non-zero entries, elementwise on (speeds, n) arrays (not einsum, whose three-operand
+    # complex forms are slow, nor a stack of small matrix products)
+    measure = np.zeros(values.shape)
+    for i, j in zip(*np.nonzero(F)):
+        measure += (F[i, j] * shapes[:, i].conj() * shapes[:, j]).real
+    amplitude = (shapes.real**2 + shapes.imag**2).sum(axis=1)
+    angle = np.angle(values)
     # For Im s < 0 (the conjugate pole) the same orbit reads the other way round.
-    turning = np.sign(np.angle(values))
+    turning = np.sign(angle)
     whirl = np.sign(np.round(measure / np.maximum(amplitude, 1e-300), 9)) * turning
     order = np.argsort(values.real + 1e3 * values.imag, axis=1, kind="stable")
     ordered = np.take_along_axis(values, order, axis=1)
@@ -123,22 +132,29 @@ def _whirl(values: np.ndarray, shapes: np.ndarray, F: np.ndarray) -> np.ndarray:
     speed, k = np.nonzero(close)  # repeated poles come in pairs (x and y)
     if speed.size:
         first, second = order[speed, k], order[speed, k + 1]
-        V = np.stack([shapes[speed, :, first], shapes[speed, :, second]], axis=-1)  # (pairs, N, 2)
-        Dg = np.einsum("pia,pib->pab", V.conj(), V)
-        Fg = np.einsum("pia,ij,pjb->pab", V.conj(), F, V)
-        Dg, Fg = (Dg + np.conj(np.swapaxes(Dg, 1, 2))) / 2, (Fg + np.conj(np.swapaxes(Fg, 1, 2))) / 2
-        det_d, det_f = np.linalg.det(Dg).real, np.linalg.det(Fg).real
+        rows = np.moveaxis(shapes, 1, 0)  # (N, speeds, n): the sums over N below add whole rows (fast)
+        a, b = rows[:, speed, first], rows[:, speed, second]  # (N, pairs) each
+        Fa, Fb = F @ a, F @ b
+        # The Hermitian 2x2 forms Dg = V^H V and Fg = V^H F V of V = [a, b], their off-diagonal entries averaged
+        d00, d11 = (a.real**2 + a.imag**2).sum(axis=0), (b.real**2 + b.imag**2).sum(axis=0)
+        d01 = (a.conj() * b).sum(axis=0)
+        f00, f11 = (a.conj() * Fa).sum(axis=0).real, (b.conj() * Fb).sum(axis=0).real
+        f01 = ((a.conj() * Fb).sum(axis=0) + (Fa.conj() * b).sum(axis=0)) / 2
+        det_d = d00 * d11 - (d01.real**2 + d01.imag**2)
+        det_f = f00 * f11 - (f01.real**2 + f01.imag**2)
         det_d = np.where(det_d != 0, det_d, 1e-300)
-        size = np.abs(Fg).max(axis=(1, 2)) / np.maximum(np.abs(Dg).max(axis=(1, 2)), 1e-300)  # |eigenvalues|
+        size_f = np.maximum(np.maximum(np.abs(f00), np.abs(f11)), np.abs(f01))
+        size_d = np.maximum(np.maximum(d00, d11), np.abs(d01))
+        size = size_f / np.maximum(size_d, 1e-300)  # |eigenvalues|
         mixed = det_f / det_d < -1e-9 * size**2  # one forward, one backward
-        trace = (Fg[:, 0, 0] * Dg[:, 1, 1] + Fg[:, 1, 1] * Dg[:, 0, 0] - Fg[:, 0, 1] * Dg[:, 1, 0]
-                 - Fg[:, 1, 0] * Dg[:, 0, 1]).real / det_d  # fmt: skip
+        trace = (f00 * d11 + f11 * d00 - 2.0 * (f01 * d01.conj()).real) / det_d
         same = np.where(np.abs(trace) > 1e-9 * size, np.sign(trace), 0.0)
         hi = np.where(mixed, 1.0, same) * turning[speed, first]
         lo = np.where(mixed, -1.0, same) * turning[speed, first]
         whirl[speed, first], whirl[speed, second] = hi, lo
     moving = amplitude > 1e-9  # rotor motion at the bearings (of a unit eigenvector)
-    oscillating = np.abs(np.angle(values)) > 1e-9
+    # Off the real axis: neither a real pole nor one at the Nyquist frequency (angle pi)
+    oscillating = (np.abs(angle) > 1e-9) & (np.pi - np.abs(angle) > 1e-9)
     return np.where(moving & oscillating, whirl, 0).astype(int)
 
 
@@ -199,22 +215,30 @@ def speed_loops(rig: RotorRig, controller: ControllerMatrix, speeds: np.ndarray,
     return _core.speed_loops(*_loop_parts(rig, controller), speeds, workers=_workers(speeds.size), **options)
 
 
+def speed_grid(rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike) -> tuple[np.ndarray, ControllerMatrix]:
+    """What a diagram over the speeds of ``rig`` starts from: ``speeds`` checked as a 1-D array of finite speeds
+    (rad/s) and ``controller`` as the four axes' :class:`ControllerMatrix`; ``rig`` must be a :class:`RotorRig`."""
+    require(isinstance(rig, RotorRig), "rig", type(rig).__name__, "a RotorRig")
+    W = np.atleast_1d(np.asarray(speeds, dtype=float))
+    require(W.ndim == 1 and W.size >= 1 and bool(np.all(np.isfinite(W))), "speeds", speeds,
+            "a 1-D array of finite speeds, rad/s")  # fmt: skip
+    return W, controller_matrix(controller, 4)
+
+
 def campbell(rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike) -> Campbell:
     """The closed-loop poles of the sampled loop of ``rig`` at each of ``speeds`` (rad/s).
 
     Every pole (rotor, lags, controller) is kept; ``whirl`` marks those that move the rotor. Unstable
     speeds are reported (``onset_speed``), not raised: a Campbell diagram is how one finds them.
     """
-    require(isinstance(rig, RotorRig), "rig", type(rig).__name__, "a RotorRig")
-    W = np.atleast_1d(np.asarray(speeds, dtype=float))
-    require(W.ndim == 1 and W.size >= 1 and bool(np.all(np.isfinite(W))), "speeds", speeds,
-            "a 1-D array of finite speeds, rad/s")  # fmt: skip
-    spec = controller_matrix(controller, 4)
+    W, spec = speed_grid(rig, controller, speeds)
     fs = spec.fs
     parts = _loop_parts(rig, spec)
     R, F = _bearing_form(rig, parts[-1].shape[0])
     values, shapes, _, _ = _core.speed_loops(*parts, W, R=R, workers=_workers(W.size))
-    order = np.argsort(np.abs(np.angle(values)), axis=1, kind="stable")
+    angle = np.angle(values)
+    # By frequency, then the upper pole of a conjugate pair first, then by modulus: no tie left to the core's order
+    order = np.lexsort((np.abs(values), -angle, np.abs(angle)), axis=-1)
     values = np.take_along_axis(values, order, axis=1)
     shapes = np.take_along_axis(shapes, order[:, None, :], axis=2)
     whirl = _whirl(values, shapes, F)

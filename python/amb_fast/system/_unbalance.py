@@ -20,8 +20,8 @@ from numpy.typing import ArrayLike
 from .._equality import ArrayRecord
 from .._linear import checked_poles
 from .._validate import real, require
-from ._campbell import speed_loops, speed_plant
-from ._control import ControllerSpec, controller_matrix
+from ._campbell import speed_grid, speed_loops, speed_plant
+from ._control import ControllerSpec
 from ._model import loop_model, plant, require_stable
 from ._rotor import RotorRig
 
@@ -121,11 +121,7 @@ def unbalance_response(
     A speed at which the loop is unstable is refused (:class:`UnstableLoopError`, naming it): there is no
     steady response there; :func:`campbell` finds such speeds. Every speed's loop, force, poles and steady
     state come from one exponential, eigenvalue problem and solve in the core, on its threads."""
-    require(isinstance(rig, RotorRig), "rig", type(rig).__name__, "a RotorRig")
-    W = np.atleast_1d(np.asarray(speeds, dtype=float))
-    require(W.ndim == 1 and W.size >= 1 and bool(np.all(np.isfinite(W))), "speeds", speeds,
-            "a 1-D array of finite speeds, rad/s")  # fmt: skip
-    spec = controller_matrix(controller, 4)
+    W, spec = speed_grid(rig, controller, speeds)
     fs = spec.fs
     require(
         bool(np.all(np.abs(W) < np.pi * fs)), "speeds", speeds, f"below the Nyquist rate pi fs = {np.pi * fs:g} rad/s"
