@@ -235,3 +235,39 @@ def test_two_axis_and_rotor_sweeps_park_the_pools_too(monkeypatch: pytest.Monkey
     for inside, counts in seen:
         assert inside & workers == set()
         assert counts == [1] * len(user)
+
+
+def test_the_campbell_diagram_and_the_run_up_park_the_pools_too(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Siblings: the Campbell diagram and the unbalance run-up run their speeds on the core's threads too; right
+    after the user's multi-threaded numpy call OpenBLAS's spinning workers took a core from them (a 500-speed
+    Campbell diagram: 40 ms, 57-79 ms after the call). Their core call sees no OpenBLAS worker and one BLAS
+    thread, and the user's setting is back afterwards."""
+    if not openblas_pools():
+        pytest.skip("no OpenBLAS built on pthreads in this process")
+    monkeypatch.setattr(_blas, "_native_thread_running", lambda: True)  # (as in seen_in_core)
+    from amb_fast.system import _campbell
+
+    seen: list[tuple[set[int], list[int]]] = []
+    core = _campbell._core
+
+    class Recording:
+        def __getattr__(self, name: str):  # noqa: ANN204
+            return getattr(core, name)
+
+        def speed_loops(self, *args, **kwargs):  # noqa: ANN202
+            seen.append((native_threads(), blas_threads()))
+            return core.speed_loops(*args, **kwargs)
+
+    monkeypatch.setattr(_campbell, "_core", Recording())
+    rig, pid, speeds = af.RotorRig.example(), af.RotorRig.example_controller(), np.linspace(0.0, 3000.0, 64)
+    with threadpoolctl.threadpool_limits(2, user_api="blas"):
+        user = blas_threads()
+        for run in (lambda: af.campbell(rig, pid, speeds),
+                    lambda: af.unbalance_response(rig, pid, speeds + 1.0, [(1e-4, 0.0, 0.0)])):  # fmt: skip
+            workers = user_matmul()
+            run()
+            inside, counts = seen[-1]
+            assert inside & workers == set()  # before the fix: the workers, spinning
+            assert counts == [1] * len(user)
+            assert blas_threads() == user
+    assert len(seen) == 2

@@ -8,6 +8,7 @@ turns with the spin (x towards y), backward against it.
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 from typing import Any
 
@@ -15,6 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _core
+from .._blas import blas_parked
 from .._equality import ArrayRecord
 from .._linear import split_dead_time
 from .._validate import require
@@ -212,7 +214,16 @@ def _loop_parts(
 def speed_loops(rig: RotorRig, controller: ControllerMatrix, speeds: np.ndarray, **options: Any) -> tuple:
     """:func:`_core.speed_loops` for ``rig`` under ``controller`` at ``speeds`` (rad/s), on the core's threads:
     the poles and, as ``options`` ask (else None), shapes, steady states and the loops (:func:`loop_model`'s)."""
-    return _core.speed_loops(*_loop_parts(rig, controller), speeds, workers=_workers(speeds.size), **options)
+    return _on_core_threads(_loop_parts(rig, controller), speeds, **options)
+
+
+def _on_core_threads(parts: tuple, speeds: np.ndarray, **options: Any) -> tuple:
+    """:func:`_core.speed_loops` of the loop ``parts`` (:func:`_loop_parts`) at ``speeds``, with OpenBLAS's idle
+    workers parked while the core's threads run: after the user's multi-threaded numpy call they busy-wait for
+    about 0.1 s on the cores those threads need (a 500-speed Campbell diagram: 40 -> 57-79 ms)."""
+    workers = _workers(speeds.size)
+    with blas_parked() if workers != 1 else contextlib.nullcontext():
+        return _core.speed_loops(*parts, speeds, workers=workers, **options)
 
 
 def speed_grid(rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike) -> tuple[np.ndarray, ControllerMatrix]:
@@ -235,7 +246,7 @@ def campbell(rig: RotorRig, controller: ControllerSpec, speeds: ArrayLike) -> Ca
     fs = spec.fs
     parts = _loop_parts(rig, spec)
     R, F = _bearing_form(rig, parts[-1].shape[0])
-    values, shapes, _, _ = _core.speed_loops(*parts, W, R=R, workers=_workers(W.size))
+    values, shapes, _, _ = _on_core_threads(parts, W, R=R)
     angle = np.angle(values)
     # By frequency, then the upper pole of a conjugate pair first, then by modulus: no tie left to the core's order
     order = np.lexsort((np.abs(values), -angle, np.abs(angle)), axis=-1)
