@@ -172,9 +172,10 @@ def speed_plant(rig: RotorRig) -> tuple[np.ndarray, np.ndarray, np.ndarray, Layo
     return A0, plant(rig.at_speed(1.0))[0] - A0, B, layout
 
 
-def _loop_parts(
-    rig: RotorRig, controller: ControllerMatrix
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+_LoopParts = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
+
+def _loop_parts(rig: RotorRig, controller: ControllerMatrix) -> _LoopParts:
     """:func:`loop_model`'s loop as :func:`_core.speed_loops` takes it: ``A0``, ``A1``, the commands' ``B``, the holds
     ``[T, T - delta, ...]`` (per fractional dead time ``delta``: its command enters as ``G0 = Gamma(T - delta)``
     and a sample late as ``Gamma(T) - G0``), ``P`` and ``L`` (the lines and the controller, at every speed)."""
@@ -217,7 +218,7 @@ def speed_loops(rig: RotorRig, controller: ControllerMatrix, speeds: np.ndarray,
     return _on_core_threads(_loop_parts(rig, controller), speeds, **options)
 
 
-def _on_core_threads(parts: tuple, speeds: np.ndarray, **options: Any) -> tuple:
+def _on_core_threads(parts: _LoopParts, speeds: np.ndarray, **options: Any) -> tuple:
     """:func:`_core.speed_loops` of the loop ``parts`` (:func:`_loop_parts`) at ``speeds``, with OpenBLAS's idle
     workers parked while the core's threads run: after the user's multi-threaded numpy call they busy-wait for
     about 0.1 s on the cores those threads need (a 500-speed Campbell diagram: 40 -> 57-79 ms)."""
