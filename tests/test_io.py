@@ -514,3 +514,19 @@ def test_saved_recordings_record_the_run_and_still_read_back(tmp_path) -> None:
     from scipy.io import loadmat
 
     assert '"seed": 9' in str(loadmat(tmp_path / "rec.mat")["amb_fast"][0])
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".mat"])
+@pytest.mark.parametrize(
+    ("force", "message"),
+    [
+        (np.r_[1.0, np.nan, 1.0], r"force must be finite, got nan at sample 1"),
+        (np.r_[1.0], r"force samples must be at least 2, got 1"),
+    ],
+)
+def test_save_recording_writes_nothing_load_recording_would_refuse(tmp_path, suffix, force, message) -> None:
+    # Before: the file was written (NaN samples, one sample) and load_recording then refused it.
+    path = tmp_path / f"r{suffix}"
+    with pytest.raises(ValueError, match=message):
+        af.save_recording(path, force=force, displacement=np.zeros(force.size), fs=4000.0)
+    assert not path.exists()

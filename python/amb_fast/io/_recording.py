@@ -97,13 +97,12 @@ def save_recording(
     from ._results import _jsonable, trailer, version
 
     path = Path(path)
-    force, displacement = series("force", force), series("displacement", displacement)
-    require(
-        displacement.size == force.size, "displacement samples", displacement.size, f"as many as force's ({force.size})"
-    )
-    fs = real("fs", fs, "Hz", positive=True)
     suffix = path.suffix.lower()
     require(suffix in (".csv", ".mat"), "path", str(path), "a file name ending in .csv or .mat")
+    # A Recording's own checks: nothing is written that load_recording would refuse (NaN, one sample).
+    fs = real("fs", fs, "Hz", positive=True)
+    checked = Recording(series("force", force), series("displacement", displacement), fs)
+    force, displacement, fs = checked.force, checked.displacement, checked.fs
     if suffix == ".csv":
 
         def write(target: Path) -> None:
