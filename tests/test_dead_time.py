@@ -125,3 +125,19 @@ def test_the_command_refuses_a_dead_time_of_1_s_before_the_run(capsys) -> None:
     status, _, err = run(capsys, "run", "--dead-time", "1", "--periods", "2")
     assert status == 2
     assert "--dead-time must be at most 1000 samples of the controller" in one_error_line(err)
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: replace(af.PID.paper(), delay=4000),
+        lambda: af.Controller.from_continuous([1.0], [1.0], fs=4000.0, delay=4000),
+        lambda: af.notch(700.0, fs=4000.0) * af.Controller.from_continuous([1.0], [1.0], fs=4000.0, delay=1001),
+    ],
+    ids=["PID", "from_continuous", "series"],
+)
+def test_a_controller_delay_of_more_than_1000_samples_is_refused_naming_it(make) -> None:
+    # the sibling of the rig's dead time: a controller's own delay is a state of the loop per sample too
+    with pytest.raises(ValueError, match=r"delay must be at most 1000 samples \(each is a state of the loop\), got"):
+        make()
+    assert replace(af.PID.paper(), delay=1000).delay == 1000

@@ -25,7 +25,7 @@ from ._dispatch import axes_aware
 from ._equality import ArrayRecord
 from ._mechanics import Mechanics
 from ._params import PID, Rig
-from ._validate import integer, require, rig_and_controller
+from ._validate import MAX_DELAY_SAMPLES, integer, require, rig_and_controller
 
 if TYPE_CHECKING:
     from .controllers import Controller
@@ -85,15 +85,12 @@ def plant_matrices(rig: Rig) -> tuple[np.ndarray, np.ndarray, list[str]]:
     return A, B, states
 
 
-MAX_DEAD_SAMPLES = 1000  # as the core's max_dead_samples: whole samples of dead time a loop models
-
-
 def split_dead_time(dead_time: float, fs: float) -> tuple[int, float]:
     """The dead time (s) as whole samples and the fraction of a sample left over (s), as the core splits it."""
     T = 1.0 / fs
     late = np.floor(dead_time / T)
     expected = "at most 1000 samples of the controller (1000 / fs s): each sample of dead time is a state of the loop"
-    require(bool(late <= MAX_DEAD_SAMPLES), "dead_time", dead_time, expected)
+    require(bool(late <= MAX_DELAY_SAMPLES), "dead_time", dead_time, expected)
     samples = int(late)
     return samples, max(0.0, dead_time - samples * T)
 

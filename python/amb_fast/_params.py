@@ -11,7 +11,7 @@ import numpy as np
 
 from . import _core
 from ._mechanics import Mechanics
-from ._validate import integer, non_negative, optional_positive, real, require
+from ._validate import delay_samples, integer, non_negative, optional_positive, real, require
 
 if TYPE_CHECKING:
     from .controllers import Controller
@@ -215,7 +215,7 @@ class PID:
             real(name, getattr(self, name), UNITS[name])
         optional_positive("derivative_cutoff", self.derivative_cutoff, "Hz")
         real("fs", self.fs, "Hz", positive=True)
-        integer("delay", self.delay, 0)
+        delay_samples("delay", self.delay)
 
     @classmethod
     def paper(cls) -> PID:

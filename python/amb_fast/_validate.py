@@ -40,6 +40,18 @@ def integer(name: str, value: Any, minimum: int) -> int:
     return int(value)
 
 
+MAX_DELAY_SAMPLES = 1000  # the core's max_dead_samples: each delayed sample is a state of the loop
+
+
+def delay_samples(name: str, value: Any) -> int:
+    """A whole number of samples of delay, 0 to 1000: beyond, the loop's poles and steady start (cubic in its
+    states) would take minutes (a mistyped delay), not a clear error."""
+    samples = integer(name, value, 0)
+    expected = f"at most {MAX_DELAY_SAMPLES} samples (each is a state of the loop)"
+    require(samples <= MAX_DELAY_SAMPLES, name, value, expected)
+    return samples
+
+
 def series(name: str, values: Any) -> np.ndarray:
     """A 1-D contiguous float64 array (the core checks finiteness sample by sample as it reads)."""
     array = np.ascontiguousarray(values, dtype=np.float64)

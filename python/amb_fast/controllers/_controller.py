@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validate import integer, real, require
+from .._validate import delay_samples, integer, real, require
 from ._statespace import (
     MAX_ORDER,
     Matrices,
@@ -103,7 +103,7 @@ class Controller:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "fs", real("fs", self.fs, "Hz", positive=True))
-        object.__setattr__(self, "delay", integer("delay", self.delay, 0))
+        object.__setattr__(self, "delay", delay_samples("delay", self.delay))
         n = len(self._b)
         require(n <= MAX_ORDER, "order", n, f"<= {MAX_ORDER} states (the delay not counted)")
         values = (*self._a, *self._b, *self._c, self._d)
@@ -235,7 +235,7 @@ class Controller:
             Whole-sample computation delay (not part of the continuous design).
         """
         real("fs", fs, "Hz", positive=True)
-        integer("delay", delay, 0)
+        delay_samples("delay", delay)
         n, d = _proper_pair(num, den, "continuous transfer function")
         return cls._raw("continuous", _discretise(n, d, float(fs), method, prewarp), fs, delay, (n, d))
 
