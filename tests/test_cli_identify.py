@@ -149,3 +149,41 @@ def test_a_mat_file_written_by_amb_fast_gives_its_mass(capsys, tmp_path, monkeyp
     assert status == 0, err
     assert "mass                1.5 kg (recorded in rec.mat)" in out
     np.testing.assert_allclose(af.load_estimate(tmp_path / "identify-output" / "estimate.csv").meta["mass"], 1.5)
+
+
+def test_a_recording_in_volts_is_read_with_its_calibration(capsys, tmp_path, recorded) -> None:
+    """A DAQ that recorded volts (force 0.005 V/N, probe 8 V/mm): refused without its calibration (before: no
+    way to give it but rescaling the file), identified with --force-scale / --displacement-scale."""
+    table = np.column_stack([recorded.time, recorded.force * 0.005, recorded.displacement * 8e3])
+    np.savetxt(tmp_path / "volts.csv", table, delimiter=",", header="time [s],force [V],displacement [V]",
+               comments="", fmt="%.17g")  # fmt: skip
+    status, _, err = run(capsys, "identify", "volts.csv", "--mass", "1.5", "--settle-periods", "2")
+    assert status == 2 and "the force channel 'force [V]' has unit 'V'" in one_error_line(err)
+    status, out, err = run(capsys, "identify", "volts.csv", "--mass", "1.5", "--settle-periods", "2",
+                           "--force-scale", "200", "--displacement-scale", "1.25e-4", "--out", "v")  # fmt: skip
+    assert status == 0, err
+    status, out2, err = run(capsys, "identify", "plain.csv", "--time", "clock", "--mass", "1.5", "--settle-periods",
+                            "2", "--out", "p")  # fmt: skip
+    assert status == 0, err
+    volts, plain = af.load_estimate(tmp_path / "v" / "estimate.csv"), af.load_estimate(tmp_path / "p" / "estimate.csv")
+    np.testing.assert_allclose(volts.H, plain.H, rtol=1e-9)  # the same estimate as from the file in N and m
+    status, _, err = run(capsys, "identify", "volts.csv", "--mass", "1.5", "--force-scale", "0")
+    assert status == 2 and "--force-scale must be a finite number != 0 (N per unit of the file), got 0" in err
+
+
+def test_load_recording_scale_applies_a_channels_calibration(tmp_path) -> None:
+    t = np.arange(16) / 4000.0
+    f, y = np.sin(2 * np.pi * 250 * t), np.cos(2 * np.pi * 250 * t)
+    np.savetxt(tmp_path / "v.csv", np.column_stack([t, f, y]), delimiter=",", comments="",
+               header="time [s],force [V],displacement [mV]", fmt="%.17g")  # fmt: skip
+    with pytest.raises(ValueError, match=r"or the channel's calibration as scale=\{'force': SI per unit\}"):
+        af.load_recording(tmp_path / "v.csv")
+    rec = af.load_recording(tmp_path / "v.csv", scale={"force": 200.0, "displacement": -1e-4})
+    np.testing.assert_array_equal(rec.force, f * 200.0)
+    np.testing.assert_array_equal(rec.displacement, y * -1e-4)  # the label (mV) is not read: the scale is all
+    assert "force 'force [V]' (x 200 N per unit of the file)" in rec.source
+    for bad, message in (({"forces": 1.0}, "scale must be keys 'force' and/or 'displacement'"),
+                         ({"force": 0.0}, r"scale\['force'\] must be a finite number != 0"),
+                         ({"displacement": np.nan}, r"scale\['displacement'\] must be a finite number")):  # fmt: skip
+        with pytest.raises(ValueError, match=message):
+            af.load_recording(tmp_path / "v.csv", scale=bad)

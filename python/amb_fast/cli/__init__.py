@@ -110,6 +110,10 @@ def build_parser() -> argparse.ArgumentParser:
                        help="time column (s, or ms/us by its unit): name or 0-based index; 'none' to ignore it "
                        "(default: the reader's time column)")  # fmt: skip
     ident.add_argument("--recording", help="which recording of a file that holds several (dSPACE export, TDMS group)")
+    ident.add_argument("--force-scale", type=float, metavar="N_PER_UNIT", help="the force channel's calibration: N "
+                       "per unit of the file (a DAQ in volts: N/V); its own unit label is then not read")  # fmt: skip
+    ident.add_argument("--displacement-scale", type=float, metavar="M_PER_UNIT", help="the displacement channel's "
+                       "calibration: m per unit of the file (a probe in volts: m/V)")  # fmt: skip
     ident.add_argument("--fs", type=float, help="sampling frequency (Hz; default: from 'fs' or the time column, which "
                        "it must match)")  # fmt: skip
     ident.add_argument("--clearance", type=float, help="mechanical clearance (m): warn if the displacement exceeds it")

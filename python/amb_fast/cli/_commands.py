@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import json
+import math
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -19,8 +20,7 @@ from .._sweep_result import SWEPT
 from .._validate import integer, real
 from ..claims import natural_frequency
 from ..io import load_recording
-from ..two_axis import run_two_axis
-from ..two_axis._command import two_axis_model
+from ..two_axis import run_two_axis, two_axis_model
 from ._options import (
     ESTIMATE_SUFFIXES,
     FIGURE_SUFFIXES,
@@ -246,6 +246,14 @@ def _read_recording(args: argparse.Namespace):  # noqa: ANN202
                      "recording": args.recording}  # fmt: skip
     if args.time is not None:  # else the reader's default time column
         options["time"] = None if args.time.lower() == "none" else _channel(args.time)
+    scale = {role: value for role, value in (("force", args.force_scale), ("displacement", args.displacement_scale))
+             if value is not None}  # fmt: skip
+    for role, value in scale.items():
+        if not (math.isfinite(value) and value != 0.0):
+            raise UsageError(f"--{role}-scale must be a finite number != 0 ({'N' if role == 'force' else 'm'} per "
+                             f"unit of the file), got {value:g}")  # fmt: skip
+    if scale:
+        options["scale"] = scale
     try:
         return load_recording(args.file, **options)
     except (ValueError, OSError, ImportError, UsageError):

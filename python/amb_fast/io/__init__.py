@@ -7,11 +7,13 @@ from __future__ import annotations
 from ._atomic import atomic_path, atomic_text, atomic_write
 from ._channels import UNITS as CHANNEL_UNITS
 from ._channels import split_unit
-from ._netcdf import read_netcdf, write_dataset_netcdf, write_netcdf
+from ._netcdf import read_netcdf, split_complex, write_dataset_netcdf, write_netcdf
 from ._recording import Recording, load_recording, save_recording
 from ._results import (
     ONE_AXIS,
+    column,
     complex_array,
+    complex_variable,
     digest,
     estimate_fields_from_csv,
     estimate_fields_from_dataset,
@@ -35,7 +37,9 @@ __all__ = [
     "ONE_AXIS",
     "RESULT_UNITS",
     "Recording",
+    "column",
     "complex_array",
+    "complex_variable",
     "digest",
     "estimate_fields_from_csv",
     "estimate_fields_from_dataset",
@@ -58,6 +62,7 @@ __all__ = [
     "save_estimate",
     "save_recording",
     "sniff",
+    "split_complex",
     "split_unit",
     "write_netcdf",
 ]

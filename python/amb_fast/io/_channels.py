@@ -77,8 +77,10 @@ def _scale(name: str, quantity: str, path: Path) -> float:
                          "millinewton? Write the unit as 'mN' or 'kN' (or rescale the column to N)")  # fmt: skip
     kind, factor = ("force", 1e6) if unit == "MN" else UNITS.get(symbol(unit).lower(), (None, 1.0))
     if kind != _QUANTITIES[quantity][0]:
+        calibration = f"scale={{{quantity!r}: SI per unit}} (a DAQ in volts: N/V, m/V)"
+        remedy = "rescale the column" if quantity == "time" else f"the channel's calibration as {calibration}"
         raise ValueError(f"{path.name}: the {quantity} channel {name!r} has unit {unit!r}; amb_fast needs "
-                         f"one of {_QUANTITIES[quantity][1]} (scaled to SI), or rescale the column")  # fmt: skip
+                         f"one of {_QUANTITIES[quantity][1]} (scaled to SI), or {remedy}")  # fmt: skip
     return factor
 
 

@@ -4,6 +4,7 @@ the MATLAB and TDMS readers return recordings, a name, ``""`` for the top level,
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -133,6 +134,7 @@ def load_recording(
     fs: float | None = None,
     recording: str | None = None,
     time: str | int | None = "time",
+    scale: Mapping[str, float] | None = None,
 ) -> Recording:
     """Read force and displacement channels from a rig's file.
 
@@ -164,6 +166,12 @@ def load_recording(
         by least squares over the whole column: a clock rounded to its printed digits is uniform (``%.4f``
         at 4 kHz gives 4000 Hz), a gap, repeat or restart is refused naming the row. ``None`` ignores any
         time column (then ``fs`` is needed). On the command line: ``--time``.
+    scale : dict, optional
+        What one unit of a channel, as the file holds it, is in SI, per channel: ``{"force": 222.4,
+        "displacement": 1.25e-4}`` for a DAQ that recorded volts (the transducers' calibration, N/V and m/V;
+        negative for a reversed polarity). A scaled channel's own unit label (``V``, LabVIEW's ``Volts``, or
+        any other) is not read; ``source`` names the factor. On the command line: ``--force-scale``,
+        ``--displacement-scale``.
 
     Returns
     -------
@@ -184,6 +192,11 @@ def load_recording(
     require(suffix in SUFFIXES, "path", str(path), f"a recording ending in {', '.join(SUFFIXES)}")
     if fs is not None:
         fs = real("fs", fs, "Hz", positive=True)
+    scales = dict(scale or {})
+    require(set(scales) <= {"force", "displacement"}, "scale", sorted(scales), "keys 'force' and/or 'displacement'")
+    for role, factor in scales.items():
+        scales[role] = real(f"scale[{role!r}]", factor, "N or m per unit of the file")
+        require(scales[role] != 0.0, f"scale[{role!r}]", factor, "a finite number != 0 (N or m per unit of the file)")
     name = ""
     if suffix in (".mat", ".tdms"):
         name, channels = _choose_recording(_read_mat(path) if suffix == ".mat" else _read_tdms(path), path, recording,
@@ -201,10 +214,14 @@ def load_recording(
         names, f_name, f_values, y_name, y_values, found, origin = _load_text(path, force, displacement, time, fs)
     described = []
     for values, channel, role, si in ((f_values, f_name, "force", "N"), (y_values, y_name, "displacement", "m")):
-        scale = _scale(channel, role, path)
-        if scale != 1.0:
-            values *= scale
-        described.append(f"{role} {channel!r}" + (f" ({split_unit(channel)[1]} -> {si})" if scale != 1.0 else ""))
+        given = scales.get(role)
+        factor = given if given is not None else _scale(channel, role, path)
+        if factor != 1.0:
+            values *= factor
+        if given is not None:
+            described.append(f"{role} {channel!r} (x {given:g} {si} per unit of the file)")
+        else:
+            described.append(f"{role} {channel!r}" + (f" ({split_unit(channel)[1]} -> {si})" if factor != 1.0 else ""))
     fs = _agree(fs, found, path, origin, names)
     where = path.name + (f" recording {name!r}" if name else "")
     source = f"{where}: {', '.join(described)}; fs {fs:.10g} Hz " + ("given" if found is None else f"from its {origin}")

@@ -20,7 +20,9 @@ import numpy as np
 from .._validate import require
 from ..io import RESULT_UNITS as UNITS
 from ..io import (
+    column,
     complex_array,
+    complex_variable,
     pandas_module,
     read_csv,
     read_npz,
@@ -30,7 +32,6 @@ from ..io import (
     write_npz,
     xarray_module,
 )
-from ..io._results import column, complex_variable
 
 if TYPE_CHECKING:
     from ._experiment import EstimateN

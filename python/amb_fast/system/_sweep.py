@@ -31,9 +31,7 @@ from .._params import PID, Rig
 from .._sweep import point_seeds, run_or_split, run_points
 from .._sweep_result import OVERFLOW, read_sweep_file, register_sweep_kind, sweep_grid, unit_of
 from .._validate import require, seed_value
-from ..io import RESULT_UNITS, pandas_module, write_netcdf, write_npz, xarray_module
-from ..io._netcdf import split_complex
-from ..io._results import complex_variable
+from ..io import RESULT_UNITS, complex_variable, pandas_module, split_complex, write_netcdf, write_npz, xarray_module
 from ._control import ControllerMatrix, ControllerSpec, controller_matrix
 from ._experiment import coefficients, core_args, experiment_forces, experiment_seeds, run_experiment, settle_for
 from ._model import System, loop_models

@@ -18,7 +18,7 @@ from .._dispatch import register
 from .._ross import coefficient_arrays, to_ross
 from ..plots import plot_coefficients2
 from ..system import ControllerMatrix
-from ._command import add_two_axis_options, run_two_axis, save_estimate2, summary2
+from ._command import add_two_axis_options, run_two_axis, save_estimate2, summary2, two_axis_model
 from ._experiment import (
     SIGNS,
     Estimate2,
@@ -77,6 +77,7 @@ __all__ = [
     "summary2",
     "sweep",
     "to_ross",
+    "two_axis_model",
 ]
 
 # af.predict(two_axis_rig, ...) and its siblings, af.identify of two experiments' recordings, run these.
