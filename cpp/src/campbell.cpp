@@ -494,20 +494,7 @@ AMB_FAST_ALWAYS_INLINE void exponential_kernel(Exponential& w, Eigen::Index e, E
         combine(p, odd, 4, b[1], T, e);
         combine(p, even, 4, b[0], V, e);
     } else {  // [13/13]
-        static constexpr double b[] = {64764752532480000.0,
-                                       32382376266240000.0,
-                                       7771770303897600.0,
-                                       1187353796428800.0,
-                                       129060195264000.0,
-                                       10559470521600.0,
-                                       670442572800.0,
-                                       33522128640.0,
-                                       1323241920.0,
-                                       40840800.0,
-                                       960960.0,
-                                       16380.0,
-                                       182.0,
-                                       1.0};
+        constexpr const auto& b = pade13;
         block_product(X2, X2, X4, e, n);
         block_product(X4, X2, X6, e, n);
         const double* p[] = {X6, X4, X2};

@@ -155,20 +155,7 @@ Augmented sum(const Augmented (&X)[3], const double (&w)[3], double w0) {
 // [13/13] Pade approximant (Higham 2005, as Eigen's MatrixFunctions and scipy's expm), on the blocks.
 MatrixXd hold(const MatrixXd& A, const MatrixXd& B, double h) {
     const Index n = A.rows(), m = B.cols();
-    static constexpr double b[] = {64764752532480000.0,
-                                   32382376266240000.0,
-                                   7771770303897600.0,
-                                   1187353796428800.0,
-                                   129060195264000.0,
-                                   10559470521600.0,
-                                   670442572800.0,
-                                   33522128640.0,
-                                   1323241920.0,
-                                   40840800.0,
-                                   960960.0,
-                                   16380.0,
-                                   182.0,
-                                   1.0};
+    constexpr const auto& b = pade13;
     const double norm =
         std::max(h * A.cwiseAbs().colwise().sum().maxCoeff(), h * B.cwiseAbs().colwise().sum().maxCoeff());
     int squarings = 0;

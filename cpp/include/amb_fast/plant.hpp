@@ -92,6 +92,23 @@ struct DeadTime {
     int samples;
     double fraction;
 };
+// The [13/13] Pade approximant's coefficients (Higham 2005, as Eigen's MatrixFunctions and scipy's expm): the
+// holds' exponentials (nd_loop's hold, the Campbell diagram's speed_loops).
+inline constexpr double pade13[] = {64764752532480000.0,
+                                    32382376266240000.0,
+                                    7771770303897600.0,
+                                    1187353796428800.0,
+                                    129060195264000.0,
+                                    10559470521600.0,
+                                    670442572800.0,
+                                    33522128640.0,
+                                    1323241920.0,
+                                    40840800.0,
+                                    960960.0,
+                                    16380.0,
+                                    182.0,
+                                    1.0};
+
 // The most whole samples of dead time a loop models (split_dead_time refuses more).
 constexpr double max_dead_samples = 1000.0;
 DeadTime split_dead_time(double dead_time, double T);
