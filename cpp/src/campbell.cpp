@@ -170,6 +170,22 @@ __attribute__((target("avx2"))) bool hessenberg_eigenvalues_avx2(double* a, Eige
 constexpr auto hessenberg_eigenvalues_avx2 = hessenberg_eigenvalues_portable;
 #endif
 
+// a -= tau v (v^T a) on rows and columns k + 1.. of a (m x m, row-major): a reflector from the left; w (m): storage
+AMB_FAST_ALWAYS_INLINE void reflect_left(double* __restrict a, Eigen::Index m, Eigen::Index k,
+                                         const double* __restrict reflector, double tau, double* __restrict w) {
+    for (Eigen::Index j = k + 1; j < m; ++j) w[j] = 0.0;
+    for (Eigen::Index i = k + 1; i < m; ++i) {
+        const double f = reflector[i];
+        const double* __restrict row = a + i * m;
+        for (Eigen::Index j = k + 1; j < m; ++j) w[j] += f * row[j];
+    }
+    for (Eigen::Index i = k + 1; i < m; ++i) {
+        const double f = tau * reflector[i];
+        double* __restrict row = a + i * m;
+        for (Eigen::Index j = k + 1; j < m; ++j) row[j] -= f * w[j];
+    }
+}
+
 // H = Q^T A Q upper Hessenberg by Householder reflections I - tau v v^T (Golub and Van Loan, 7.4.2): h (m x m,
 // row-major) holds A and becomes H; q (m x m, row-major, or null) becomes Q. v (m x m: reflector k in row k),
 // tau and w (m each): storage. Row-major loops over contiguous rows (vectorised where the processor can; the
@@ -188,18 +204,7 @@ AMB_FAST_ALWAYS_INLINE void hessenberg_kernel(double* __restrict h, Eigen::Index
         reflector[k + 1] = 1.0;
         for (Eigen::Index i = k + 2; i < m; ++i) reflector[i] = h[i * m + k] / beta;
         const double t = tau[k];
-        // from the left on rows k + 1.., columns k + 1.. (column k becomes mu e1): w = v^T A, A -= tau v w
-        for (Eigen::Index j = k + 1; j < m; ++j) w[j] = 0.0;
-        for (Eigen::Index i = k + 1; i < m; ++i) {
-            const double f = reflector[i];
-            const double* __restrict row = h + i * m;
-            for (Eigen::Index j = k + 1; j < m; ++j) w[j] += f * row[j];
-        }
-        for (Eigen::Index i = k + 1; i < m; ++i) {
-            const double f = t * reflector[i];
-            double* __restrict row = h + i * m;
-            for (Eigen::Index j = k + 1; j < m; ++j) row[j] -= f * w[j];
-        }
+        reflect_left(h, m, k, reflector, t, w);  // column k becomes mu e1 (set below)
         h[(k + 1) * m + k] = mu;
         for (Eigen::Index i = k + 2; i < m; ++i) h[i * m + k] = 0.0;
         // from the right on every row, columns k + 1..: A -= (A v) tau v^T; the sums (A v)_i in order, four rows
@@ -232,18 +237,7 @@ AMB_FAST_ALWAYS_INLINE void hessenberg_kernel(double* __restrict h, Eigen::Index
     for (Eigen::Index i = 0; i < m; ++i) q[i * m + i] = 1.0;
     for (Eigen::Index k = m - 3; k >= 0; --k) {
         if (tau[k] == 0.0) continue;
-        const double* __restrict reflector = v + k * m;
-        for (Eigen::Index j = k + 1; j < m; ++j) w[j] = 0.0;
-        for (Eigen::Index i = k + 1; i < m; ++i) {
-            const double f = reflector[i];
-            const double* __restrict row = q + i * m;
-            for (Eigen::Index j = k + 1; j < m; ++j) w[j] += f * row[j];
-        }
-        for (Eigen::Index i = k + 1; i < m; ++i) {
-            const double f = tau[k] * reflector[i];
-            double* __restrict row = q + i * m;
-            for (Eigen::Index j = k + 1; j < m; ++j) row[j] -= f * w[j];
-        }
+        reflect_left(q, m, k, v + k * m, tau[k], w);
     }
 }
 
