@@ -30,3 +30,13 @@ def lagged_rig() -> af.Rig:
 @pytest.fixture
 def pid() -> af.PID:
     return af.PID(**GAINS, derivative_cutoff=1000.0)
+
+
+@pytest.fixture(params=["pandas", "numpy"])
+def text_parser(request, monkeypatch) -> str:
+    """Text is parsed by pandas when it is installed, else by numpy: the text tests run with both."""
+    if request.param == "numpy":
+        monkeypatch.setitem(__import__("sys").modules, "pandas", None)
+    else:
+        pytest.importorskip("pandas")
+    return request.param

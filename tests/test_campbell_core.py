@@ -23,6 +23,20 @@ def random_parts(rng: np.random.Generator, n: int = 7, k: int = 2, m: int = 11) 
     return A0, A1, B, np.array([2.5e-4, 1.7e-4]), P, L
 
 
+def reference_loop(A0, A1, B, holds, P, L, W: float) -> np.ndarray:  # noqa: ANN001
+    """The loop at speed W from scipy's expm: L + [Phi | Gamma(h) for each hold] P (Phi from the first hold)."""
+    n, k = B.shape
+    blocks = []
+    for j, h in enumerate(holds):
+        aug = np.zeros((n + k, n + k))
+        aug[:n, :n], aug[:n, n:] = (A0 + W * A1) * h, B * h
+        E = scipy.linalg.expm(aug)
+        blocks += [E[:n, :n]] * (j == 0) + [E[:n, n:]]
+    expected = L.copy()
+    expected[:n] += np.hstack(blocks) @ P
+    return expected
+
+
 @pytest.mark.parametrize("workers", [1, 2])
 def test_speed_loops_are_scipys_expm_eigvals_and_solve(workers: int) -> None:
     """Each speed's loop is L + [Phi | Gamma(T) | Gamma(h)] P from scipy's expm; its poles are numpy's
@@ -30,21 +44,14 @@ def test_speed_loops_are_scipys_expm_eigvals_and_solve(workers: int) -> None:
     ``z = e^{jpT}`` with the force's sample integral from scipy's complex expm."""
     rng = np.random.default_rng(1)
     A0, A1, B, holds, P, L = random_parts(rng)
-    n, k, m = B.shape[0], B.shape[1], L.shape[0]
+    n, m = B.shape[0], L.shape[0]
     b = rng.standard_normal(n) + 1j * rng.standard_normal(n)
     speeds = np.linspace(-500.0, 2000.0, 37)
     values, shapes, states, loops = _core.speed_loops(A0, A1, B, holds, P, L, speeds, drive=b, loops=True,
                                                       workers=workers)  # fmt: skip
     assert shapes is None and loops.shape == (speeds.size, m, m) and states.shape == (speeds.size, m)
     for W, M, z, x in zip(speeds, loops, values, states):
-        blocks = []
-        for j, h in enumerate(holds):
-            aug = np.zeros((n + k, n + k))
-            aug[:n, :n], aug[:n, n:] = (A0 + W * A1) * h, B * h
-            E = scipy.linalg.expm(aug)
-            blocks += [E[:n, :n]] * (j == 0) + [E[:n, n:]]
-        expected = L.copy()
-        expected[:n] += np.hstack(blocks) @ P
+        expected = reference_loop(A0, A1, B, holds, P, L, W)
         np.testing.assert_allclose(M, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
         assert matched(z, np.linalg.eigvals(expected)) < 1e-10 * np.abs(z).max()
         aug = np.zeros((n + 1, n + 1), dtype=complex)
@@ -61,21 +68,13 @@ def test_speed_loops_exponential_at_every_pade_degree(norm: float) -> None:
     augmented matrix's norm: at each, the loop is L + [Phi | Gamma(T) | Gamma(h)] P from scipy's expm."""
     rng = np.random.default_rng(7)
     A0, A1, B, holds, P, L = random_parts(rng)
-    n, k = B.shape
     # The augmented matrix [[A0 T, B T], [0, 0]]'s 1-norm about ``norm`` (the balanced one is no larger).
     size = max(np.abs(A0 * holds[0]).sum(axis=0).max(), np.abs(B * holds[0]).sum(axis=0).max())
     A0, A1, B = A0 * norm / size, A1 * norm / size, B * norm / size
     speeds = np.array([0.0, 0.5])
     _, _, _, loops = _core.speed_loops(A0, A1, B, holds, P, L, speeds, loops=True)
     for W, M in zip(speeds, loops):
-        blocks = []
-        for j, h in enumerate(holds):
-            aug = np.zeros((n + k, n + k))
-            aug[:n, :n], aug[:n, n:] = (A0 + W * A1) * h, B * h
-            E = scipy.linalg.expm(aug)
-            blocks += [E[:n, :n]] * (j == 0) + [E[:n, n:]]
-        expected = L.copy()
-        expected[:n] += np.hstack(blocks) @ P
+        expected = reference_loop(A0, A1, B, holds, P, L, W)
         np.testing.assert_allclose(M, expected, rtol=0, atol=1e-13 * np.abs(expected).max())
 
 

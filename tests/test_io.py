@@ -18,16 +18,6 @@ from amb_fast.io import _atomic
 FS = 4000.0
 
 
-@pytest.fixture(params=["pandas", "numpy"])
-def text_parser(request, monkeypatch) -> str:
-    """Text is parsed by pandas when it is installed, else by numpy: the text tests run with both."""
-    if request.param == "numpy":
-        monkeypatch.setitem(__import__("sys").modules, "pandas", None)
-    else:
-        pytest.importorskip("pandas")
-    return request.param
-
-
 @pytest.fixture(scope="module")
 def recording() -> tuple[np.ndarray, np.ndarray]:
     """Force (N) and displacement (m) of the paper rig, 8 periods of a 1-100 Hz multisine."""

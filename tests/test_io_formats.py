@@ -21,16 +21,6 @@ F = np.sin(np.arange(N))  # N
 Y = 1e-6 * np.cos(np.arange(N))  # m
 
 
-@pytest.fixture(params=["pandas", "numpy"])
-def text_parser(request, monkeypatch) -> str:
-    """Text is parsed by pandas when it is installed, else by numpy: the text tests run with both."""
-    if request.param == "numpy":
-        monkeypatch.setitem(__import__("sys").modules, "pandas", None)
-    else:
-        pytest.importorskip("pandas")
-    return request.param
-
-
 def rows(sep: str = ",", y_scale: float = 1.0, end: str = "\n", comma: bool = False) -> list[str]:
     """The data lines time, force, displacement (times y_scale), %.10g; decimal commas if comma."""
     out = []
