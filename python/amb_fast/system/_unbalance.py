@@ -93,10 +93,10 @@ def _unbalance_forces(rig: RotorRig, unbalance: Any) -> list[tuple[np.ndarray, c
 def _drive(rig: RotorRig, sources: list[tuple[np.ndarray, complex]]) -> np.ndarray:
     """``b`` (plant states,) complex: the rotating force ``Re(W^2 b e^{jWt})`` on the plant's state (the
     accelerations of the unbalances' forces per (rad/s)^2)."""
-    A0, _, _, lay = speed_plant(rig)
+    A, _, lay = plant(rig)  # its size and layout (the speed's gyroscopic rows do not matter here)
     mech = rig.mechanics()
     Mt = mech.mass + mech.actuators.T @ np.diag([a.mass_loading for a in rig.axes]) @ mech.actuators
-    b = np.zeros(A0.shape[0], dtype=complex)
+    b = np.zeros(A.shape[0], dtype=complex)
     b[list(lay.velocity)] = np.linalg.solve(Mt, sum(me * direction for direction, me in sources))
     return b
 
